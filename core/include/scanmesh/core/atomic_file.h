@@ -1,0 +1,28 @@
+// Atomic file output: every file scanmesh writes goes through here, so a crash, a kill or a
+// full disk never leaves a half-written file under the final name.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <ostream>
+#include <span>
+#include <string_view>
+
+namespace scanmesh {
+
+//! Writes `bytes` to a temporary file beside `path`, fsyncs it and renames it over `path`.
+//! Throws IoError (naming the file and the OS reason, e.g. "No space left on device") if any
+//! step fails; the temporary file is removed and an existing `path` is left untouched.
+void write_file_atomically(const std::filesystem::path& path, std::span<const std::uint8_t> bytes);
+void write_file_atomically(const std::filesystem::path& path, std::string_view text);
+
+//! Same, for writers that stream: `fill` writes into a binary std::ostream backed by a
+//! buffer; nothing touches the disk until `fill` returns.
+void write_file_atomically(const std::filesystem::path& path,
+                           const std::function<void(std::ostream&)>& fill);
+
+//! Reads a whole file. Throws IoError if it cannot be opened or read.
+std::vector<std::uint8_t> read_file_bytes(const std::filesystem::path& path);
+
+}  // namespace scanmesh

@@ -1,0 +1,41 @@
+// Typed errors of scanmesh. Every module boundary throws one of these; the CLI maps each type
+// to its own exit code (docs/cli.md) and prints the message as one line on stderr.
+#pragma once
+
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+
+namespace scanmesh {
+
+//! Base of all scanmesh errors; `what()` is a sentence a user can act on.
+class Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+//! A parameter or configuration value is impossible (negative size, unknown option, ...).
+class InvalidInputError : public Error {
+ public:
+  using Error::Error;
+};
+
+//! A file exists but its content is malformed, truncated, corrupt or inconsistent.
+//! The message always names the file.
+class FileFormatError : public Error {
+ public:
+  FileFormatError(const std::filesystem::path& file, const std::string& problem)
+      : Error(file.string() + ": " + problem), file_(file) {}
+  const std::filesystem::path& file() const { return file_; }
+
+ private:
+  std::filesystem::path file_;
+};
+
+//! The operating system refused a read or write (missing file, permission, disk full).
+class IoError : public Error {
+ public:
+  using Error::Error;
+};
+
+}  // namespace scanmesh

@@ -1,0 +1,34 @@
+// 8/16-bit raster images and PNG I/O (libpng). Pictures for people: textures, depth maps,
+// renders, curvature maps.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <vector>
+
+#include "scanmesh/core/color.h"
+
+namespace scanmesh {
+
+//! Row-major 8-bit image, row 0 at the top, `channels` = 1 (grey), 3 (RGB) or 4 (RGBA).
+struct Image8 {
+  int width = 0, height = 0, channels = 3;
+  std::vector<std::uint8_t> pixels;
+
+  Image8() = default;
+  Image8(int w, int h, int c, std::uint8_t fill = 0);
+  std::uint8_t* at(int x, int y) { return &pixels[(static_cast<std::size_t>(y) * width + x) * channels]; }
+  const std::uint8_t* at(int x, int y) const {
+    return &pixels[(static_cast<std::size_t>(y) * width + x) * channels];
+  }
+  void set_rgb(int x, int y, Rgb8 c);
+  Rgb8 rgb(int x, int y) const;
+};
+
+//! Writes an 8-bit PNG atomically. Throws IoError on failure.
+void write_png(const std::filesystem::path& path, const Image8& image);
+//! Reads an 8-bit grey/RGB/RGBA PNG (16-bit and palette images are converted to 8-bit).
+//! Throws FileFormatError for anything that is not a readable PNG.
+Image8 read_png(const std::filesystem::path& path);
+
+}  // namespace scanmesh
