@@ -1,1 +1,134 @@
-int main() { return 0; }
+// scanmesh: one binary, one subcommand per pipeline stage (docs/cli.md).
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "cli_support.h"
+#include "commands.h"
+
+namespace {
+
+using namespace scanmesh::cli;
+
+void add_cleaning_options(CLI::App& cmd, scanmesh::CleaningOptions& o) {
+  cmd.add_option("--spike-mm", o.spike_threshold_mm,
+                 "Spike threshold above the neighbour median (mm)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  cmd.add_option("--spike-spread", o.spike_spread_factor,
+                 "Extra threshold in units of the prediction spread")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  cmd.add_option("--min-fragment", o.min_component_cells, "Pieces with fewer cells are removed")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+}
+
+void add_mesh_options(CLI::App& cmd, scanmesh::GridMeshOptions& o) {
+  cmd.add_option("--max-jump", o.max_depth_jump_mm,
+                 "No triangles across depth jumps above this (mm)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  cmd.add_flag("!--open-seam", o.close_seam, "Do not connect the last phi column to the first");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"scanmesh: rotary laser scans to range grids to meshes", "scanmesh"};
+  app.set_version_flag("--version", SCANMESH_VERSION);
+  app.require_subcommand(1);
+
+  SimArgs sim;
+  auto* sim_cmd =
+      app.add_subcommand("sim", "Simulate a cylindrical range scan: scene + scanner -> grid file");
+  sim_cmd->add_option("--scene", sim.scene, "Scene YAML (default: built-in head)")
+      ->check(CLI::ExistingFile);
+  sim_cmd->add_option("--scanner", sim.scanner, "Scanner YAML (default: built-in head scanner)")
+      ->check(CLI::ExistingFile);
+  sim_cmd->add_option("--seed", sim.seed, "Random seed of all defects");
+  sim_cmd->add_option("--noise", sim.noise_sigma_mm, "Range noise sigma (mm)")
+      ->check(CLI::NonNegativeNumber);
+  sim_cmd->add_option("-o,--out", sim.out, "Output grid file (.smg)")->required();
+
+  InfoArgs info;
+  auto* info_cmd = app.add_subcommand("info", "Describe a grid (.smg) or mesh (.ply) file");
+  info_cmd->add_option("file", info.file, "Grid or mesh file")->required();
+  info_cmd->add_flag("--json", info.json, "Print JSON instead of text");
+
+  ExportArgs exp;
+  auto* export_cmd =
+      app.add_subcommand("export", "Export a grid to PCD / PLY points / texture and depth PNG");
+  export_cmd->add_option("grid", exp.grid, "Grid file (.smg)")->required();
+  export_cmd->add_option("--pcd", exp.pcd, "Organised PCD point cloud");
+  export_cmd->add_option("--ply", exp.ply, "PLY point cloud of the valid cells");
+  export_cmd->add_option("--texture", exp.texture, "Texture PNG (pixel x, y = phi, h index)");
+  export_cmd->add_option("--depth", exp.depth, "Depth picture PNG");
+
+  CleanArgs clean;
+  auto* clean_cmd = app.add_subcommand("clean", "Remove spikes and isolated fragments from a grid");
+  clean_cmd->add_option("grid", clean.grid, "Grid file (.smg)")->required();
+  clean_cmd->add_option("-o,--out", clean.out, "Cleaned grid file (.smg)")->required();
+  add_cleaning_options(*clean_cmd, clean.options);
+
+  GridMeshArgs gm;
+  auto* gm_cmd =
+      app.add_subcommand("grid-mesh", "Triangulate a grid: two triangles per valid cell quad");
+  gm_cmd->add_option("grid", gm.grid, "Grid file (.smg)")->required();
+  gm_cmd->add_option("-o,--out", gm.out_ply, "Mesh PLY");
+  gm_cmd->add_option("--obj", gm.out_obj, "Mesh OBJ (+ .mtl and <stem>_texture.png)");
+  gm_cmd->add_option("--stl", gm.out_stl, "Mesh STL");
+  gm_cmd->add_option("--render", gm.render_png, "Shaded picture of the mesh (PNG)");
+  add_mesh_options(*gm_cmd, gm.options);
+
+  RenderArgs render;
+  auto* render_cmd = app.add_subcommand("render", "Render a PLY mesh to a shaded PNG");
+  render_cmd->add_option("mesh", render.mesh, "Mesh file (.ply)")->required();
+  render_cmd->add_option("-o,--out", render.out, "Output PNG")->required();
+  render_cmd->add_option("--size", render.size, "Image size in pixels")
+      ->capture_default_str()
+      ->check(CLI::Range(16, 8192));
+  render_cmd->add_option("--azimuth", render.azimuth_deg, "Camera azimuth (deg)")
+      ->capture_default_str();
+  render_cmd->add_option("--elevation", render.elevation_deg, "Camera elevation (deg)")
+      ->capture_default_str();
+  render_cmd->add_flag("--wireframe", render.wireframe, "Draw triangle edges");
+
+  DemoArgs demo;
+  auto* demo_cmd =
+      app.add_subcommand("demo", "Simulated head scan -> clean grid -> mesh, pictures and report");
+  demo_cmd->add_option("-o,--out", demo.out, "Output folder")->capture_default_str();
+  demo_cmd->add_option("--scene", demo.scene, "Scene YAML (default: built-in head)")
+      ->check(CLI::ExistingFile);
+  demo_cmd->add_option("--scanner", demo.scanner, "Scanner YAML (default: built-in head scanner)")
+      ->check(CLI::ExistingFile);
+  demo_cmd->add_option("--seed", demo.seed, "Random seed of all defects");
+  add_cleaning_options(*demo_cmd, demo.cleaning);
+  add_mesh_options(*demo_cmd, demo.meshing);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    // One clear line, then where to look; never CLI11's multi-line dump.
+    std::cerr << "scanmesh: usage error: " << e.what() << " (see 'scanmesh "
+              << (app.get_subcommands().empty() ? ""
+                                                : app.get_subcommands().front()->get_name() + " ")
+              << "--help')\n";
+    return kUsageError;
+  }
+
+  return run_guarded([&] {
+    if (*sim_cmd) return run_sim(sim);
+    if (*info_cmd) return run_info(info);
+    if (*export_cmd) return run_export(exp);
+    if (*clean_cmd) return run_clean(clean);
+    if (*gm_cmd) return run_grid_mesh(gm);
+    if (*render_cmd) return run_render(render);
+    return run_demo(demo);
+  });
+}

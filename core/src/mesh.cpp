@@ -16,7 +16,8 @@ void require(bool ok, const std::string& what) {
 void Mesh::validate() const {
   const auto nv = static_cast<long long>(positions.size());
   for (std::size_t v = 0; v < positions.size(); ++v)
-    require(positions[v].allFinite(), "vertex " + std::to_string(v) + " has a non-finite coordinate");
+    require(positions[v].allFinite(),
+            "vertex " + std::to_string(v) + " has a non-finite coordinate");
   for (std::size_t f = 0; f < triangles.size(); ++f)
     for (int k : triangles[f])
       require(k >= 0 && k < nv, "face " + std::to_string(f) + " refers to vertex " +
@@ -45,7 +46,7 @@ void Mesh::compute_vertex_normals() {
   normals.resize(positions.size());
   for (std::size_t v = 0; v < positions.size(); ++v) {
     const double len = sum[v].norm();
-    normals[v] = len > 0 ? (sum[v] / len).cast<float>() : Eigen::Vector3f::UnitZ();
+    normals[v] = len > 0 ? Eigen::Vector3f((sum[v] / len).cast<float>()) : Eigen::Vector3f::UnitZ();
   }
 }
 

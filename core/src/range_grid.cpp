@@ -15,7 +15,8 @@ RangeGrid::RangeGrid(int n_phi, int n_h, double phi0, double h0, double dh)
     throw InvalidInputError("range grid needs at least 2 x 2 cells, got " + std::to_string(n_phi) +
                             " x " + std::to_string(n_h));
   if (!(dh > 0.0) || !std::isfinite(dh))
-    throw InvalidInputError("range grid height step dh must be positive, got " + std::to_string(dh));
+    throw InvalidInputError("range grid height step dh must be positive, got " +
+                            std::to_string(dh));
   if (!std::isfinite(phi0) || !std::isfinite(h0))
     throw InvalidInputError("range grid origin phi0/h0 must be finite");
   const std::size_t n = cell_count();
@@ -34,7 +35,8 @@ int RangeGrid::wrap_phi(int i) const {
 
 void RangeGrid::set_sample(int i, int j, float r, float confidence) {
   if (!(r > 0.0f) || !std::isfinite(r))
-    throw InvalidInputError("range grid radius must be positive and finite, got " + std::to_string(r));
+    throw InvalidInputError("range grid radius must be positive and finite, got " +
+                            std::to_string(r));
   const std::size_t k = index(i, j);
   radius_[k] = r;
   valid_[k] = 1;

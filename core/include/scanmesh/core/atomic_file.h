@@ -8,6 +8,7 @@
 #include <ostream>
 #include <span>
 #include <string_view>
+#include <vector>
 
 namespace scanmesh {
 
@@ -21,6 +22,14 @@ void write_file_atomically(const std::filesystem::path& path, std::string_view t
 //! buffer; nothing touches the disk until `fill` returns.
 void write_file_atomically(const std::filesystem::path& path,
                            const std::function<void(std::ostream&)>& fill);
+
+//! For writers that can only write to a path themselves (e.g. PCL): a unique temporary path
+//! beside `path`, named `.<filename>.tmp.<pid>.<counter>`. Nothing is created.
+std::filesystem::path temporary_path_beside(const std::filesystem::path& path);
+//! Second half of an atomic write done by someone else: fsyncs the complete file `temporary`
+//! and renames it over `path`. On failure removes `temporary` and throws IoError.
+void commit_temporary_file(const std::filesystem::path& temporary,
+                           const std::filesystem::path& path);
 
 //! Reads a whole file. Throws IoError if it cannot be opened or read.
 std::vector<std::uint8_t> read_file_bytes(const std::filesystem::path& path);

@@ -17,7 +17,9 @@ struct Image8 {
 
   Image8() = default;
   Image8(int w, int h, int c, std::uint8_t fill = 0);
-  std::uint8_t* at(int x, int y) { return &pixels[(static_cast<std::size_t>(y) * width + x) * channels]; }
+  std::uint8_t* at(int x, int y) {
+    return &pixels[(static_cast<std::size_t>(y) * width + x) * channels];
+  }
   const std::uint8_t* at(int x, int y) const {
     return &pixels[(static_cast<std::size_t>(y) * width + x) * channels];
   }

@@ -22,8 +22,8 @@ struct Mesh {
   std::vector<Rgb8> colors;              //!< per vertex
   std::vector<int> face_labels;          //!< per face (region, material, ...)
 
-  std::vector<Eigen::Vector2f> texcoords;              //!< (u, v), v = 0 at the image bottom
-  std::vector<std::array<int, 3>> face_texcoords;      //!< per face, indices into texcoords
+  std::vector<Eigen::Vector2f> texcoords;          //!< (u, v), v = 0 at the image bottom
+  std::vector<std::array<int, 3>> face_texcoords;  //!< per face, indices into texcoords
 
   std::size_t vertex_count() const { return positions.size(); }
   std::size_t face_count() const { return triangles.size(); }

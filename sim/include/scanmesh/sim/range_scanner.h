@@ -16,21 +16,21 @@ namespace scanmesh::sim {
 
 struct ScannerConfig {
   int n_phi = 512, n_h = 512;
-  double radius_mm = 300.0;      //!< scanner circle R (rays start here)
-  double h0_mm = 0.0;            //!< height of row 0
-  double dh_mm = 0.45;           //!< row spacing
+  double radius_mm = 300.0;  //!< scanner circle R (rays start here)
+  double h0_mm = 0.0;        //!< height of row 0
+  double dh_mm = 0.45;       //!< row spacing
   double phi0_rad = 0.0;
   // Defects, each switchable. All random choices come from `seed`.
-  double noise_sigma_mm = 0.0;          //!< Gaussian range noise
+  double noise_sigma_mm = 0.0;  //!< Gaussian range noise
   bool grazing_dropout = true;
-  double grazing_limit_deg = 75.0;      //!< drop if angle(ray, normal) exceeds this
+  double grazing_limit_deg = 75.0;  //!< drop if angle(ray, normal) exceeds this
   bool occlusion = true;
-  double camera_baseline_deg = 20.0;    //!< triangulation camera offset around the axis
+  double camera_baseline_deg = 20.0;  //!< triangulation camera offset around the axis
   double camera_radius_mm = 300.0;
   bool hair = true;
   double hair_noise_sigma_mm = 1.5;
   double hair_dropout_probability = 0.25;
-  double spike_probability = 0.0;       //!< outliers: r off by 5..40 mm
+  double spike_probability = 0.0;  //!< outliers: r off by 5..40 mm
   bool height_band = true;
   double band_min_mm = -1e9, band_max_mm = 1e9;  //!< rows outside measure nothing
   std::uint64_t seed = 1;

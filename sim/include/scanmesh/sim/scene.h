@@ -38,9 +38,9 @@ struct FieldSample {
 SurfaceGeometry geometry_from_field(const FieldSample& f);
 
 struct RayHit {
-  double t = 0.0;            //!< ray parameter (direction is unit length, so t is in mm)
-  Eigen::Vector3d point;     //!< exact hit point
-  int object = -1;           //!< index of the scene object hit
+  double t = 0.0;         //!< ray parameter (direction is unit length, so t is in mm)
+  Eigen::Vector3d point;  //!< exact hit point
+  int object = -1;        //!< index of the scene object hit
 };
 
 //! One object of a scene (an analytic shape or a whole skeletal implicit surface).

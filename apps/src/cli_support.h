@@ -1,0 +1,51 @@
+// Shared plumbing of the scanmesh command line: exit codes, error mapping, progress display.
+#pragma once
+
+#include <chrono>
+#include <functional>
+#include <string>
+
+namespace scanmesh::cli {
+
+//! Exit codes, documented in docs/cli.md.
+enum ExitCode : int {
+  kSuccess = 0,
+  kInternalError = 1,
+  kUsageError = 2,
+  kInvalidInput = 3,  //!< impossible parameter or configuration value
+  kBadFile = 4,       //!< malformed, truncated or corrupt input file
+  kIoFailure = 5,     //!< the OS refused a read or write (missing file, disk full, ...)
+};
+
+//! Runs a command; maps scanmesh's typed errors to an exit code and one line on stderr.
+int run_guarded(const std::function<int()>& command);
+
+//! A one-line progress bar on stderr when stderr is a terminal; silent otherwise, so logs and
+//! CI output stay clean.
+class Progress {
+ public:
+  explicit Progress(std::string label);
+  ~Progress();
+  void update(int done, int total);
+  void finish();
+
+ private:
+  std::string label_;
+  bool enabled_;
+  bool finished_ = false;
+  int last_percent_ = -1;
+};
+
+//! Wall-clock stopwatch for the timings in report.json.
+class Stopwatch {
+ public:
+  Stopwatch() : start_(std::chrono::steady_clock::now()) {}
+  double seconds() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+
+ private:
+  std::chrono::steady_clock::time_point start_;
+};
+
+}  // namespace scanmesh::cli

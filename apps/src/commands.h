@@ -1,0 +1,67 @@
+// The scanmesh subcommands. Each takes its parsed arguments and returns an exit code; errors
+// are thrown as scanmesh's typed exceptions and mapped in main().
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "scanmesh/acquisition/grid_cleaning.h"
+#include "scanmesh/meshing/grid_mesh.h"
+
+namespace scanmesh::cli {
+
+struct SimArgs {
+  std::string scene;    //!< empty: built-in head
+  std::string scanner;  //!< empty: built-in head scanner
+  std::optional<std::uint64_t> seed;
+  std::optional<double> noise_sigma_mm;
+  std::string out;
+};
+int run_sim(const SimArgs& args);
+
+struct InfoArgs {
+  std::string file;
+  bool json = false;
+};
+int run_info(const InfoArgs& args);
+
+struct ExportArgs {
+  std::string grid;
+  std::string pcd, ply, texture, depth;
+};
+int run_export(const ExportArgs& args);
+
+struct CleanArgs {
+  std::string grid;
+  std::string out;
+  CleaningOptions options;
+};
+int run_clean(const CleanArgs& args);
+
+struct GridMeshArgs {
+  std::string grid;
+  std::string out_ply, out_obj, out_stl, render_png;
+  GridMeshOptions options;
+};
+int run_grid_mesh(const GridMeshArgs& args);
+
+struct RenderArgs {
+  std::string mesh;
+  std::string out;
+  int size = 640;
+  double azimuth_deg = 180.0, elevation_deg = 10.0;
+  bool wireframe = false;
+};
+int run_render(const RenderArgs& args);
+
+struct DemoArgs {
+  std::string out = "scanmesh-demo";
+  std::string scene, scanner;
+  std::optional<std::uint64_t> seed;
+  CleaningOptions cleaning;
+  GridMeshOptions meshing;
+};
+int run_demo(const DemoArgs& args);
+
+}  // namespace scanmesh::cli

@@ -1,0 +1,218 @@
+// End-to-end tests of the scanmesh binary: the demo's outputs, exit codes and error messages.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "scanmesh/core/grid_file.h"
+#include "scanmesh/core/image.h"
+
+namespace scanmesh {
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kBinary = fs::path(SCANMESH_BINARY_DIR) / "apps" / "scanmesh";
+
+struct RunResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr together
+};
+
+RunResult run(const std::string& args) {
+  const std::string command = kBinary.string() + " " + args + " 2>&1";
+  RunResult result;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return result;
+  std::array<char, 4096> buffer{};
+  while (std::fgets(buffer.data(), buffer.size(), pipe)) result.output += buffer.data();
+  const int status = pclose(pipe);
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+fs::path scratch_dir(const std::string& name) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("scanmesh_test_cli_" + std::to_string(getpid())) / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+// One demo run shared by the tests that inspect its outputs (it is the slowest step).
+class Demo : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    out_ = new fs::path(scratch_dir("demo"));
+    result_ = new RunResult(run("demo --out " + out_->string()));
+  }
+  static void TearDownTestSuite() {
+    fs::remove_all(*out_);
+    delete out_;
+    delete result_;
+  }
+  static fs::path* out_;
+  static RunResult* result_;
+};
+fs::path* Demo::out_ = nullptr;
+RunResult* Demo::result_ = nullptr;
+
+TEST_F(Demo, ProducesEveryListedFile) {
+  ASSERT_EQ(result_->exit_code, 0) << result_->output;
+  for (const char* name : {"scan_raw.smg", "scan.smg", "scan.pcd", "mesh.ply", "mesh.obj",
+                           "mesh.mtl", "texture.png", "depth.png", "render.png", "report.json"}) {
+    EXPECT_TRUE(fs::exists(*out_ / name)) << name;
+    EXPECT_GT(fs::file_size(*out_ / name), 50u) << name;
+  }
+  // Atomic writes leave no temporary files behind.
+  for (const auto& entry : fs::directory_iterator(*out_))
+    EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos) << entry.path();
+}
+
+TEST_F(Demo, ReportDescribesTheRunAndItsAccuracy) {
+  ASSERT_EQ(result_->exit_code, 0) << result_->output;
+  std::ifstream in(*out_ / "report.json");
+  const nlohmann::json report = nlohmann::json::parse(in);
+  EXPECT_EQ(report["raw_grid"]["n_phi"], 512);
+  EXPECT_EQ(report["raw_grid"]["n_h"], 512);
+  EXPECT_GT(report["grid_mesh"]["mesh"]["faces"].get<long>(), 100000);
+  EXPECT_EQ(report["grid_mesh"]["mesh"]["nonmanifold_edges"], 0);
+  EXPECT_EQ(report["grid_mesh"]["mesh"]["inconsistently_oriented_edges"], 0);
+  EXPECT_GT(report["dropouts"]["occluded"].get<long>(), 0);
+  EXPECT_GT(report["dropouts"]["grazing"].get<long>(), 0);
+  // Cleaning must catch nearly all simulated spikes; what remains is measured against truth.
+  const auto& acc = report["accuracy_vs_ground_truth"];
+  EXPECT_LE(acc["spikes_left_after_cleaning"].get<long>(),
+            acc["spikes_simulated"].get<long>() / 20);
+  // Outside the hair the scanner's sigma is 0.1 mm; the hair zone is simulated 15x noisier.
+  EXPECT_LT(acc["outside_hair"]["rms_error_mm"].get<double>(), 0.15);
+  EXPECT_LT(std::abs(acc["outside_hair"]["mean_error_mm"].get<double>()), 0.02);
+  EXPECT_GT(acc["hair"]["rms_error_mm"].get<double>(),
+            acc["outside_hair"]["rms_error_mm"].get<double>());
+  for (const char* key : {"simulate_s", "clean_s", "grid_mesh_s", "total_s"})
+    EXPECT_TRUE(report["timings"].contains(key)) << key;
+  EXPECT_TRUE(report["versions"].contains("scanmesh"));
+}
+
+TEST_F(Demo, ObjTexcoordsMapEachVertexToItsOwnTexturePixel) {
+  ASSERT_EQ(result_->exit_code, 0) << result_->output;
+  const RangeGrid grid = read_grid(*out_ / "scan.smg");
+  const Image8 texture = read_png(*out_ / "texture.png");
+  ASSERT_EQ(texture.width, grid.n_phi());
+  ASSERT_EQ(texture.height, grid.n_h());
+  std::ifstream obj(*out_ / "mesh.obj");
+  std::vector<Eigen::Vector3d> v;
+  std::vector<Eigen::Vector2d> vt;
+  std::string line;
+  std::size_t corners = 0;
+  while (std::getline(obj, line)) {
+    std::istringstream s(line);
+    std::string tag;
+    s >> tag;
+    if (tag == "v") {
+      Eigen::Vector3d p;
+      s >> p.x() >> p.y() >> p.z();
+      v.push_back(p);
+    } else if (tag == "vt") {
+      Eigen::Vector2d t;
+      s >> t.x() >> t.y();
+      vt.push_back(t);
+    } else if (tag == "f") {
+      std::string corner;
+      while (s >> corner) {
+        const int vi = std::stoi(corner) - 1;
+        const int ti = std::stoi(corner.substr(corner.find('/') + 1)) - 1;
+        const Eigen::Vector3d& p = v.at(vi);
+        const Eigen::Vector2d& t = vt.at(ti);
+        const int px = static_cast<int>(std::floor(t.x() * texture.width)) % texture.width;
+        const int py = static_cast<int>(std::floor((1.0 - t.y()) * texture.height));
+        // The pixel's cell, lifted to 3D, is the vertex itself.
+        ASSERT_TRUE(grid.valid(px, py));
+        EXPECT_LT((grid.cartesian(px, py) - p).norm(), 1e-3) << "corner " << corner;
+        EXPECT_EQ(texture.rgb(px, py), grid.color(px, py));
+        ++corners;
+      }
+    }
+  }
+  EXPECT_GT(corners, 300000u);
+}
+
+TEST_F(Demo, InfoDescribesTheGridAndTheMesh) {
+  ASSERT_EQ(result_->exit_code, 0) << result_->output;
+  const RunResult grid_info = run("info --json " + (*out_ / "scan.smg").string());
+  ASSERT_EQ(grid_info.exit_code, 0) << grid_info.output;
+  EXPECT_EQ(nlohmann::json::parse(grid_info.output)["kind"], "range grid");
+  const RunResult mesh_info = run("info " + (*out_ / "mesh.ply").string());
+  ASSERT_EQ(mesh_info.exit_code, 0) << mesh_info.output;
+  EXPECT_NE(mesh_info.output.find("faces"), std::string::npos);
+}
+
+TEST(Cli, EverySubcommandHasHelp) {
+  for (const char* sub : {"sim", "info", "export", "clean", "grid-mesh", "render", "demo"}) {
+    const RunResult r = run(std::string(sub) + " --help");
+    EXPECT_EQ(r.exit_code, 0) << sub;
+    EXPECT_NE(r.output.find("Usage"), std::string::npos) << sub;
+  }
+}
+
+TEST(Cli, BadArgumentsGiveOneLineAndExitCodeTwo) {
+  for (const char* args : {"", "no-such-command", "sim", "grid-mesh", "demo --max-jump -3",
+                           "sim --out x.smg --noise abc"}) {
+    const RunResult r = run(args);
+    EXPECT_EQ(r.exit_code, 2) << "args: " << args << "\n" << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  }
+}
+
+TEST(Cli, CorruptGridFileIsReportedWithItsNameAndExitCodeFour) {
+  const fs::path dir = scratch_dir("corrupt");
+  const fs::path bad = dir / "bad.smg";
+  std::ofstream(bad) << "SCANMESHGRID but not really";
+  const RunResult r = run("export " + bad.string() + " --texture " + (dir / "t.png").string());
+  EXPECT_EQ(r.exit_code, 4) << r.output;
+  EXPECT_NE(r.output.find("bad.smg"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "t.png"));
+}
+
+TEST(Cli, MissingInputIsAnIoErrorOrUsageError) {
+  const RunResult r = run("info /nonexistent/scan.smg");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("/nonexistent/scan.smg"), std::string::npos) << r.output;
+}
+
+TEST(Cli, SimThenExportThenGridMeshOnASmallScanner) {
+  const fs::path dir = scratch_dir("pipeline");
+  std::ofstream(dir / "scanner.yaml")
+      << "n_phi: 96\nn_h: 64\nradius_mm: 300\nh0_mm: 20\ndh_mm: 2.5\n"
+         "noise_sigma_mm: 0.05\nseed: 3\n";
+  const std::string grid = (dir / "g.smg").string();
+  RunResult r = run("sim --scanner " + (dir / "scanner.yaml").string() + " --out " + grid);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = run("export " + grid + " --pcd " + (dir / "g.pcd").string() + " --ply " +
+          (dir / "g.ply").string() + " --texture " + (dir / "t.png").string() + " --depth " +
+          (dir / "d.png").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* f : {"g.pcd", "g.ply", "t.png", "d.png"}) EXPECT_TRUE(fs::exists(dir / f)) << f;
+  r = run("clean " + grid + " --out " + (dir / "c.smg").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = run("grid-mesh " + (dir / "c.smg").string() + " --out " + (dir / "m.ply").string() +
+          " --obj " + (dir / "m.obj").string() + " --stl " + (dir / "m.stl").string() +
+          " --render " + (dir / "r.png").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* f : {"m.ply", "m.obj", "m.mtl", "m_texture.png", "m.stl", "r.png"})
+    EXPECT_TRUE(fs::exists(dir / f)) << f;
+  r = run("render " + (dir / "m.ply").string() + " --out " + (dir / "r2.png").string() +
+          " --size 64");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(read_png(dir / "r2.png").width, 64);
+}
+
+}  // namespace
+}  // namespace scanmesh
