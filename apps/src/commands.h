@@ -55,6 +55,14 @@ struct RenderArgs {
 };
 int run_render(const RenderArgs& args);
 
+struct CurvatureArgs {
+  std::string grid;
+  std::string out;                  //!< output directory
+  std::string method = "analytic";  //!< analytic | quadric | seed
+  double radius_mm = 0;             //!< quadric neighbourhood radius; <= 0: the default
+};
+int run_curvature(const CurvatureArgs& args);
+
 struct DemoArgs {
   std::string out = "scanmesh-demo";
   std::string scene, scanner;

@@ -93,6 +93,20 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   render_cmd->add_flag("--wireframe", render.wireframe, "Draw triangle edges");
 
+  CurvatureArgs curv;
+  auto* curv_cmd = app.add_subcommand(
+      "curvature", "Normals and curvature of a grid: fields file, pictures and curvature.json");
+  curv_cmd->add_option("grid", curv.grid, "Grid file (.smg)")->required();
+  curv_cmd->add_option("-o,--out", curv.out, "Output folder")->required();
+  curv_cmd->add_option("--method", curv.method, "analytic, quadric or seed (seed 000's operator)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"analytic", "quadric", "seed", "seed000"}));
+  curv_cmd
+      ->add_option("--radius", curv.radius_mm,
+                   "Neighbourhood radius of the quadric fit (mm; 0: default)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+
   DemoArgs demo;
   auto* demo_cmd =
       app.add_subcommand("demo", "Simulated head scan -> clean grid -> mesh, pictures and report");
@@ -129,6 +143,7 @@ int main(int argc, char** argv) {
     if (*clean_cmd) return run_clean(clean);
     if (*gm_cmd) return run_grid_mesh(gm);
     if (*render_cmd) return run_render(render);
+    if (*curv_cmd) return run_curvature(curv);
     return run_demo(demo);
   });
 }

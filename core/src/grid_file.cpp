@@ -1,15 +1,11 @@
 // Native range grid file (.smg), version 1. Byte layout, version policy and the list of what the
 // reader rejects: docs/formats.md, "Native range grid file (.smg)".
 //
-// All numbers are little-endian and are assembled byte by byte, so the code is correct on any
-// host byte order without a byte-swap branch.
+// All numbers are little-endian (core/binary_io.h).
 #include "scanmesh/core/grid_file.h"
-
-#include <zlib.h>
 
 #include <algorithm>
 #include <array>
-#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -17,6 +13,7 @@
 #include <string>
 
 #include "scanmesh/core/atomic_file.h"
+#include "scanmesh/core/binary_io.h"
 #include "scanmesh/core/errors.h"
 
 namespace scanmesh {
@@ -32,49 +29,6 @@ constexpr std::size_t kFixedHeaderBytes = 60;
 constexpr std::size_t kCrcBytes = 4;
 // radius f32 + valid u8 + confidence f32 + rgb 3 x u8
 constexpr std::uint64_t kBytesPerCell = 12;
-
-class Writer {
- public:
-  explicit Writer(std::vector<std::uint8_t>& out) : out_(out) {}
-  void u8(std::uint8_t v) { out_.push_back(v); }
-  void u32(std::uint32_t v) {
-    for (int k = 0; k < 4; ++k) out_.push_back(static_cast<std::uint8_t>(v >> (8 * k)));
-  }
-  void u64(std::uint64_t v) {
-    for (int k = 0; k < 8; ++k) out_.push_back(static_cast<std::uint8_t>(v >> (8 * k)));
-  }
-  void f32(float v) { u32(std::bit_cast<std::uint32_t>(v)); }
-  void f64(double v) { u64(std::bit_cast<std::uint64_t>(v)); }
-  void bytes(const void* p, std::size_t n) {
-    const auto* b = static_cast<const std::uint8_t*>(p);
-    out_.insert(out_.end(), b, b + n);
-  }
-
- private:
-  std::vector<std::uint8_t>& out_;
-};
-
-std::uint32_t get_u32(const std::uint8_t* p) {
-  return static_cast<std::uint32_t>(p[0]) | static_cast<std::uint32_t>(p[1]) << 8 |
-         static_cast<std::uint32_t>(p[2]) << 16 | static_cast<std::uint32_t>(p[3]) << 24;
-}
-std::uint64_t get_u64(const std::uint8_t* p) {
-  return static_cast<std::uint64_t>(get_u32(p)) | static_cast<std::uint64_t>(get_u32(p + 4)) << 32;
-}
-float get_f32(const std::uint8_t* p) { return std::bit_cast<float>(get_u32(p)); }
-double get_f64(const std::uint8_t* p) { return std::bit_cast<double>(get_u64(p)); }
-
-std::uint32_t crc32_of(const std::uint8_t* p, std::size_t n) {
-  uLong crc = crc32(0L, Z_NULL, 0);
-  // zlib takes uInt lengths; feed in chunks so files over 4 GiB would still be right.
-  while (n > 0) {
-    const auto chunk = static_cast<uInt>(std::min<std::size_t>(n, 1u << 30));
-    crc = crc32(crc, p, chunk);
-    p += chunk;
-    n -= chunk;
-  }
-  return static_cast<std::uint32_t>(crc);
-}
 
 std::string hex32(std::uint32_t v) {
   char buf[16];
@@ -99,7 +53,7 @@ std::vector<std::uint8_t> encode_grid(const RangeGrid& grid) {
 
   std::vector<std::uint8_t> out;
   out.reserve(header_length + kBytesPerCell * n + kCrcBytes);
-  Writer w(out);
+  ByteWriter w(out);
   w.bytes(kMagic.data(), kMagic.size());
   w.u32(kGridFileVersion);
   w.u32(static_cast<std::uint32_t>(header_length));
@@ -142,15 +96,15 @@ RangeGrid decode_grid(std::span<const std::uint8_t> bytes, const std::filesystem
          std::to_string(kFixedHeaderBytes + kCrcBytes));
 
   // 2. Version before anything else: a later version may lay out the rest differently.
-  const std::uint32_t version = get_u32(p + 16);
+  const std::uint32_t version = read_le_u32(p + 16);
   if (version != kGridFileVersion)
     fail("version " + std::to_string(version) + " not supported; this build reads version " +
          std::to_string(kGridFileVersion));
 
   // 3. Sizes, checked against the limit and the actual byte count before anything is allocated.
-  const std::uint32_t header_length = get_u32(p + 20);
-  const std::uint32_t n_phi = get_u32(p + 24);
-  const std::uint32_t n_h = get_u32(p + 28);
+  const std::uint32_t header_length = read_le_u32(p + 20);
+  const std::uint32_t n_phi = read_le_u32(p + 24);
+  const std::uint32_t n_h = read_le_u32(p + 28);
   if (n_phi < 2 || n_h < 2)
     fail("grid size " + std::to_string(n_phi) + " x " + std::to_string(n_h) +
          " is impossible (at least 2 x 2)");
@@ -170,27 +124,27 @@ RangeGrid decode_grid(std::span<const std::uint8_t> bytes, const std::filesystem
          std::to_string(size));
 
   // 4. Checksum over everything before it.
-  const std::uint32_t stored_crc = get_u32(p + size - kCrcBytes);
+  const std::uint32_t stored_crc = read_le_u32(p + size - kCrcBytes);
   const std::uint32_t actual_crc = crc32_of(p, size - kCrcBytes);
   if (stored_crc != actual_crc)
     fail("checksum mismatch (stored " + hex32(stored_crc) + ", computed " + hex32(actual_crc) +
          "): the file is corrupt");
 
   // 5. Geometry.
-  const double phi0 = get_f64(p + 32), h0 = get_f64(p + 40), dh = get_f64(p + 48);
+  const double phi0 = read_le_f64(p + 32), h0 = read_le_f64(p + 40), dh = read_le_f64(p + 48);
   if (!std::isfinite(phi0) || !std::isfinite(h0)) fail("phi0/h0 are not finite");
   if (!std::isfinite(dh) || !(dh > 0.0))
     fail("height step dh = " + std::to_string(dh) + " is not positive");
 
   // 6. Metadata, every length checked against the end of the header.
   std::map<std::string, std::string> metadata;
-  const std::uint32_t metadata_count = get_u32(p + 56);
+  const std::uint32_t metadata_count = read_le_u32(p + 56);
   std::size_t pos = kFixedHeaderBytes;
   const auto read_string = [&](std::uint32_t entry, const char* what) {
     if (header_length - pos < 4)
       fail("metadata entry " + std::to_string(entry) + ": " + what +
            " length runs past the header");
-    const std::uint32_t len = get_u32(p + pos);
+    const std::uint32_t len = read_le_u32(p + pos);
     pos += 4;
     if (len > header_length - pos)
       fail("metadata entry " + std::to_string(entry) + ": " + what + " of " + std::to_string(len) +
@@ -217,8 +171,8 @@ RangeGrid decode_grid(std::span<const std::uint8_t> bytes, const std::filesystem
   const std::uint8_t* rgb_plane = confidence_plane + 4 * n;
   for (std::size_t k = 0; k < n; ++k) {
     const std::uint8_t v = valid_plane[k];
-    const float r = get_f32(radius_plane + 4 * k);
-    const float c = get_f32(confidence_plane + 4 * k);
+    const float r = read_le_f32(radius_plane + 4 * k);
+    const float c = read_le_f32(confidence_plane + 4 * k);
     if (v > 1)
       fail(cell_name(k, n_phi) + ": validity byte " + std::to_string(v) + " is not 0 or 1");
     if (v == 1 && (!std::isfinite(r) || !(r > 0.0f)))
@@ -237,8 +191,8 @@ RangeGrid decode_grid(std::span<const std::uint8_t> bytes, const std::filesystem
   auto& confidences = grid.confidences();
   auto& colors = grid.colors();
   for (std::size_t k = 0; k < n; ++k) {
-    radii[k] = get_f32(radius_plane + 4 * k);
-    confidences[k] = get_f32(confidence_plane + 4 * k);
+    radii[k] = read_le_f32(radius_plane + 4 * k);
+    confidences[k] = read_le_f32(confidence_plane + 4 * k);
     colors[k] = Rgb8{rgb_plane[3 * k], rgb_plane[3 * k + 1], rgb_plane[3 * k + 2]};
   }
   std::memcpy(validity.data(), valid_plane, n);

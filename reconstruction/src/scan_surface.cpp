@@ -1,1 +1,373 @@
-// written in this change
+// Continuous scan surface: bicubic Hermite patches over the grid nodes (docs/reconstruction.md).
+#include "scanmesh/reconstruction/scan_surface.h"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+namespace scanmesh {
+
+namespace {
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+
+// Cubic Hermite basis on [0, 1] and its first two derivatives: value weights for the end
+// points (v0, v1) and slope weights (d0, d1).
+struct HermiteBasis {
+  std::array<double, 3> v0, v1, d0, d1;  // [value, first derivative, second derivative]
+  explicit HermiteBasis(double t) {
+    const double t2 = t * t, t3 = t2 * t;
+    v0 = {2 * t3 - 3 * t2 + 1, 6 * t2 - 6 * t, 12 * t - 6};
+    v1 = {-2 * t3 + 3 * t2, -6 * t2 + 6 * t, -12 * t + 6};
+    d0 = {t3 - 2 * t2 + t, 3 * t2 - 4 * t + 1, 6 * t - 4};
+    d1 = {t3 - t2, 3 * t2 - 2 * t, 6 * t - 2};
+  }
+};
+
+// Node data of the Hermite interpolant in grid units (per index step).
+struct NodeData {
+  double r, r_u, r_v, r_uv;
+};
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Differential geometry of X(phi, h) = (r cos phi, r sin phi, h)
+
+SurfaceJet lift(double phi, double h, const RadiusJet& j) {
+  const double c = std::cos(phi), s = std::sin(phi);
+  const Eigen::Vector3d radial(c, s, 0), tangential(-s, c, 0);
+  SurfaceJet out;
+  out.position = j.r * radial + Eigen::Vector3d(0, 0, h);
+  out.d_phi = j.r_phi * radial + j.r * tangential;
+  out.d_h = j.r_h * radial + Eigen::Vector3d::UnitZ();
+  out.d_phiphi = (j.r_phiphi - j.r) * radial + 2.0 * j.r_phi * tangential;
+  out.d_phih = j.r_phih * radial + j.r_h * tangential;
+  out.d_hh = j.r_hh * radial;
+  return out;
+}
+
+Eigen::Vector3d SurfaceJet::normal() const {
+  // d_phi x d_h points away from the axis for any r > 0.
+  return d_phi.cross(d_h).normalized();
+}
+
+SurfaceCurvature SurfaceJet::curvature() const {
+  SurfaceCurvature out;
+  out.normal = normal();
+  Eigen::Matrix2d first, second;
+  first << d_phi.dot(d_phi), d_phi.dot(d_h), d_phi.dot(d_h), d_h.dot(d_h);
+  // Minus sign: with the outward normal a convex surface has X_uu . n < 0, and the project's
+  // convention is k > 0 for convex.
+  second << -d_phiphi.dot(out.normal), -d_phih.dot(out.normal), -d_phih.dot(out.normal),
+      -d_hh.dot(out.normal);
+  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::Matrix2d> solver(second, first);
+  out.k2 = solver.eigenvalues()(0);
+  out.k1 = solver.eigenvalues()(1);
+  const Eigen::Vector2d a1 = solver.eigenvectors().col(1), a2 = solver.eigenvectors().col(0);
+  out.dir1 = (a1(0) * d_phi + a1(1) * d_h).normalized();
+  out.dir2 = (a2(0) * d_phi + a2(1) * d_h).normalized();
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// ScanSurface
+
+ScanSurface::ScanSurface(const RangeGrid& grid)
+    : n_phi_(grid.n_phi()),
+      n_h_(grid.n_h()),
+      phi0_(grid.phi0()),
+      h0_(grid.h0()),
+      dphi_(grid.dphi()),
+      dh_(grid.dh()),
+      r_(grid.radii()),
+      valid_(grid.validity()),
+      support_ok_(grid.cell_count(), 0) {
+  for (int j = 0; j + 1 < n_h_; ++j)
+    for (int i = 0; i < n_phi_; ++i)
+      support_ok_[j * static_cast<std::size_t>(n_phi_) + i] = support_valid(i, j);
+  // Root search samples finer than the finest cell: phi spacing at the smallest radius.
+  double min_r = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < r_.size(); ++k)
+    if (valid_[k]) min_r = std::min(min_r, static_cast<double>(r_[k]));
+  if (std::isfinite(min_r)) sampling_step_mm_ = 0.25 * std::min(dh_, min_r * dphi_);
+}
+
+bool ScanSurface::cell_valid(int i, int j) const {
+  if (j < 0 || j >= n_h_) return false;
+  const int w = ((i % n_phi_) + n_phi_) % n_phi_;
+  return valid_[static_cast<std::size_t>(j) * n_phi_ + w] != 0;
+}
+
+float ScanSurface::r_at(int i, int j) const {
+  const int w = ((i % n_phi_) + n_phi_) % n_phi_;
+  return r_[static_cast<std::size_t>(j) * n_phi_ + w];
+}
+
+// A patch is defined where its four corners are valid; its tangents then use central
+// differences where both neighbours are valid and one-sided ones otherwise, so it never
+// reads an invalid cell.
+bool ScanSurface::support_valid(int i, int j) const {
+  return cell_valid(i, j) && cell_valid(i + 1, j) && cell_valid(i, j + 1) &&
+         cell_valid(i + 1, j + 1);
+}
+
+bool ScanSurface::to_grid(double phi, double h, double& u, double& v) const {
+  if (!std::isfinite(phi) || !std::isfinite(h)) return false;
+  v = (h - h0_) / dh_;
+  if (v < 0.0 || v > n_h_ - 1) return false;
+  u = std::fmod((phi - phi0_) / dphi_, static_cast<double>(n_phi_));
+  if (u < 0.0) u += n_phi_;
+  if (u >= n_phi_) u = 0.0;
+  return true;
+}
+
+bool ScanSurface::defined(double phi, double h) const {
+  double u, v;
+  if (!to_grid(phi, h, u, v)) return false;
+  const int i = std::min(static_cast<int>(u), n_phi_ - 1);
+  const int j = std::min(static_cast<int>(v), n_h_ - 2);
+  return support_ok_[static_cast<std::size_t>(j) * n_phi_ + i] != 0;
+}
+
+namespace {
+
+// Slope of a 1D sequence at the middle sample from its valid neighbours.
+double slope(bool has_prev, double prev, double here, bool has_next, double next) {
+  if (has_prev && has_next) return 0.5 * (next - prev);
+  if (has_next) return next - here;
+  if (has_prev) return here - prev;
+  return 0.0;
+}
+
+}  // namespace
+
+std::optional<RadiusJet> ScanSurface::radius(double phi, double h) const {
+  double u, v;
+  if (!to_grid(phi, h, u, v)) return std::nullopt;
+  const int i = std::min(static_cast<int>(u), n_phi_ - 1);
+  const int j = std::min(static_cast<int>(v), n_h_ - 2);
+  if (!support_ok_[static_cast<std::size_t>(j) * n_phi_ + i]) return std::nullopt;
+
+  auto node = [&](int ni, int nj) {
+    const double r = r_at(ni, nj);
+    const bool left = cell_valid(ni - 1, nj), right = cell_valid(ni + 1, nj);
+    const bool down = cell_valid(ni, nj - 1), up = cell_valid(ni, nj + 1);
+    NodeData d{r, slope(left, left ? r_at(ni - 1, nj) : 0, r, right, right ? r_at(ni + 1, nj) : 0),
+               slope(down, down ? r_at(ni, nj - 1) : 0, r, up, up ? r_at(ni, nj + 1) : 0), 0.0};
+    if (cell_valid(ni - 1, nj - 1) && cell_valid(ni + 1, nj - 1) && cell_valid(ni - 1, nj + 1) &&
+        cell_valid(ni + 1, nj + 1))
+      d.r_uv = 0.25 * (r_at(ni + 1, nj + 1) - r_at(ni + 1, nj - 1) - r_at(ni - 1, nj + 1) +
+                       r_at(ni - 1, nj - 1));
+    return d;
+  };
+  const std::array<std::array<NodeData, 2>, 2> n = {
+      {{node(i, j), node(i, j + 1)}, {node(i + 1, j), node(i + 1, j + 1)}}};
+  const HermiteBasis bs(u - i), bt(v - j);
+
+  // Sum over the four corners: value, u-slope, v-slope and twist, each with its basis.
+  std::array<double, 6> acc{};  // r, r_u, r_v, r_uu, r_uv, r_vv
+  for (int a = 0; a < 2; ++a)
+    for (int b = 0; b < 2; ++b) {
+      const auto& vs = a == 0 ? bs.v0 : bs.v1;
+      const auto& ds = a == 0 ? bs.d0 : bs.d1;
+      const auto& vt = b == 0 ? bt.v0 : bt.v1;
+      const auto& dt = b == 0 ? bt.d0 : bt.d1;
+      const NodeData& c = n[a][b];
+      auto term = [&](int ks, int kt) {
+        return c.r * vs[ks] * vt[kt] + c.r_u * ds[ks] * vt[kt] + c.r_v * vs[ks] * dt[kt] +
+               c.r_uv * ds[ks] * dt[kt];
+      };
+      acc[0] += term(0, 0);
+      acc[1] += term(1, 0);
+      acc[2] += term(0, 1);
+      acc[3] += term(2, 0);
+      acc[4] += term(1, 1);
+      acc[5] += term(0, 2);
+    }
+  RadiusJet jet;
+  jet.r = acc[0];
+  jet.r_phi = acc[1] / dphi_;
+  jet.r_h = acc[2] / dh_;
+  jet.r_phiphi = acc[3] / (dphi_ * dphi_);
+  jet.r_phih = acc[4] / (dphi_ * dh_);
+  jet.r_hh = acc[5] / (dh_ * dh_);
+  return jet;
+}
+
+std::optional<SurfaceJet> ScanSurface::evaluate(double phi, double h) const {
+  const auto r = radius(phi, h);
+  if (!r) return std::nullopt;
+  return lift(phi, h, *r);
+}
+
+std::optional<Eigen::Vector3d> ScanSurface::position(double phi, double h) const {
+  const auto r = radius(phi, h);
+  if (!r) return std::nullopt;
+  return Eigen::Vector3d(r->r * std::cos(phi), r->r * std::sin(phi), h);
+}
+
+std::optional<RadiusJet> ScanSurface::node_jet(int i, int j) const {
+  if (j < 1 || j + 1 >= n_h_) return std::nullopt;
+  for (int dj = -1; dj <= 1; ++dj)
+    for (int di = -1; di <= 1; ++di)
+      if (!cell_valid(i + di, j + dj)) return std::nullopt;
+  const double r = r_at(i, j);
+  RadiusJet jet;
+  jet.r = r;
+  jet.r_phi = 0.5 * (r_at(i + 1, j) - r_at(i - 1, j)) / dphi_;
+  jet.r_h = 0.5 * (r_at(i, j + 1) - r_at(i, j - 1)) / dh_;
+  jet.r_phiphi = (r_at(i + 1, j) - 2.0 * r + r_at(i - 1, j)) / (dphi_ * dphi_);
+  jet.r_hh = (r_at(i, j + 1) - 2.0 * r + r_at(i, j - 1)) / (dh_ * dh_);
+  jet.r_phih = 0.25 *
+               (r_at(i + 1, j + 1) - r_at(i + 1, j - 1) - r_at(i - 1, j + 1) + r_at(i - 1, j - 1)) /
+               (dphi_ * dh_);
+  return jet;
+}
+
+Eigen::Vector3d ScanSurface::to_cylindrical(const Eigen::Vector3d& x) {
+  double phi = std::atan2(x.y(), x.x());
+  if (phi < 0) phi += kTwoPi;
+  return {phi, x.z(), std::hypot(x.x(), x.y())};
+}
+
+std::optional<double> ScanSurface::implicit_value(const Eigen::Vector3d& x) const {
+  const Eigen::Vector3d c = to_cylindrical(x);
+  const auto r = radius(c.x(), c.y());
+  if (!r) return std::nullopt;
+  return r->r - c.z();
+}
+
+std::optional<ImplicitSample> ScanSurface::implicit(const Eigen::Vector3d& x) const {
+  const Eigen::Vector3d c = to_cylindrical(x);
+  const double rho = c.z();
+  if (rho < 1e-9) return std::nullopt;  // phi is undefined on the axis
+  const auto r = radius(c.x(), c.y());
+  if (!r) return std::nullopt;
+  const Eigen::Vector3d grad_phi(-x.y() / (rho * rho), x.x() / (rho * rho), 0.0);
+  const Eigen::Vector3d grad_rho(x.x() / rho, x.y() / rho, 0.0);
+  return ImplicitSample{r->r - rho,
+                        r->r_phi * grad_phi + r->r_h * Eigen::Vector3d::UnitZ() - grad_rho};
+}
+
+namespace {
+
+// Bisection on a bracketed sign change of f; f is defined on the whole bracket by
+// construction (both ends defined and the step below the cell size), but a sample that is
+// undefined inside still ends the refinement at the last good bracket.
+template <typename F>
+double refine_root(const F& f, double a, double fa, double b, double tolerance) {
+  for (int it = 0; it < 200 && b - a > tolerance; ++it) {
+    const double m = 0.5 * (a + b);
+    const auto fm = f(m);
+    if (!fm) break;
+    if ((*fm < 0) == (fa < 0)) {
+      a = m;
+      fa = *fm;
+    } else {
+      b = m;
+    }
+  }
+  return 0.5 * (a + b);
+}
+
+// All sign changes of f over [t0, t1] sampled with `steps` intervals.
+template <typename F>
+std::vector<double> sampled_roots(const F& f, double t0, double t1, long steps, double tolerance) {
+  std::vector<double> roots;
+  const double dt = (t1 - t0) / static_cast<double>(steps);
+  std::optional<double> prev = f(t0);
+  double prev_t = t0;
+  if (prev && *prev == 0.0) roots.push_back(t0);
+  for (long k = 1; k <= steps; ++k) {
+    const double t = k == steps ? t1 : t0 + k * dt;
+    const std::optional<double> cur = f(t);
+    if (prev && cur) {
+      if (*cur == 0.0)
+        roots.push_back(t);
+      else if (*prev != 0.0 && ((*prev < 0) != (*cur < 0)))
+        roots.push_back(refine_root(f, prev_t, *prev, t, tolerance));
+    }
+    prev = cur;
+    prev_t = t;
+  }
+  return roots;
+}
+
+}  // namespace
+
+std::vector<SurfaceHit> ScanSurface::intersect_segment(const Eigen::Vector3d& origin,
+                                                       const Eigen::Vector3d& direction,
+                                                       double t_min, double t_max,
+                                                       double max_step_mm,
+                                                       double tolerance_mm) const {
+  std::vector<SurfaceHit> hits;
+  const double speed = direction.norm();
+  if (!(speed > 0) || !(t_max > t_min)) return hits;
+  if (!(sampling_step_mm_ > 0)) return hits;  // no valid cell at all
+  double step = sampling_step_mm_;
+  if (max_step_mm > 0) step = std::min(step, max_step_mm);
+  const long steps =
+      std::max<long>(1, static_cast<long>(std::ceil((t_max - t_min) * speed / step)));
+  const auto f = [&](double t) { return implicit_value(origin + t * direction); };
+  for (double t : sampled_roots(f, t_min, t_max, steps, tolerance_mm / speed)) {
+    SurfaceHit hit;
+    hit.t = t;
+    hit.point = origin + t * direction;
+    const Eigen::Vector3d c = to_cylindrical(hit.point);
+    hit.phi = c.x();
+    hit.h = c.y();
+    hits.push_back(hit);
+  }
+  return hits;
+}
+
+std::vector<double> ScanSurface::intersect_circle(const Eigen::Vector3d& centre, double radius,
+                                                  const Eigen::Vector3d& u,
+                                                  const Eigen::Vector3d& v,
+                                                  double tolerance_mm) const {
+  if (!(radius > 0) || !(sampling_step_mm_ > 0)) return {};
+  const double step = sampling_step_mm_;
+  const long steps = std::max<long>(64, static_cast<long>(std::ceil(kTwoPi * radius / step)));
+  const auto f = [&](double theta) {
+    return implicit_value(centre + radius * (std::cos(theta) * u + std::sin(theta) * v));
+  };
+  std::vector<double> roots = sampled_roots(f, 0.0, kTwoPi, steps, tolerance_mm / radius);
+  // theta = 0 and 2 pi are the same point.
+  if (roots.size() >= 2 && roots.front() == 0.0 && roots.back() >= kTwoPi) roots.pop_back();
+  for (double& t : roots)
+    if (t >= kTwoPi) t -= kTwoPi;
+  std::sort(roots.begin(), roots.end());
+  return roots;
+}
+
+std::optional<SurfaceProjection> ScanSurface::project(const Eigen::Vector3d& x) const {
+  const Eigen::Vector3d c = to_cylindrical(x);
+  double phi = c.x(), h = c.y();
+  for (int it = 0; it < 50; ++it) {
+    const auto jet = evaluate(phi, h);
+    if (!jet) return std::nullopt;
+    Eigen::Matrix<double, 3, 2> jac;
+    jac << jet->d_phi, jet->d_h;
+    const Eigen::Vector2d delta =
+        (jac.transpose() * jac).ldlt().solve(jac.transpose() * (x - jet->position));
+    // Damp steps larger than a few cells: the Gauss-Newton model is local.
+    const double limit = 4.0;
+    const double scale =
+        std::min(1.0, limit / std::max(std::abs(delta(0)) / dphi_, std::abs(delta(1)) / dh_));
+    phi += scale * delta(0);
+    h += scale * delta(1);
+    if (std::abs(delta(0)) * c.z() < 1e-9 && std::abs(delta(1)) < 1e-9) break;
+  }
+  const auto p = position(phi, h);
+  if (!p) return std::nullopt;
+  phi = std::fmod(phi, kTwoPi);
+  if (phi < 0) phi += kTwoPi;
+  return SurfaceProjection{*p, phi, h, (*p - x).norm()};
+}
+
+}  // namespace scanmesh

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "scanmesh/core/grid_file.h"
 #include "scanmesh/core/image.h"
@@ -67,7 +68,8 @@ RunResult* Demo::result_ = nullptr;
 TEST_F(Demo, ProducesEveryListedFile) {
   ASSERT_EQ(result_->exit_code, 0) << result_->output;
   for (const char* name : {"scan_raw.smg", "scan.smg", "scan.pcd", "mesh.ply", "mesh.obj",
-                           "mesh.mtl", "texture.png", "depth.png", "render.png", "report.json"}) {
+                           "mesh.mtl", "texture.png", "depth.png", "render.png", "fields.smf", "curvature.png",
+                           "report.json"}) {
     EXPECT_TRUE(fs::exists(*out_ / name)) << name;
     EXPECT_GT(fs::file_size(*out_ / name), 50u) << name;
   }
@@ -96,7 +98,9 @@ TEST_F(Demo, ReportDescribesTheRunAndItsAccuracy) {
   EXPECT_LT(std::abs(acc["outside_hair"]["mean_error_mm"].get<double>()), 0.02);
   EXPECT_GT(acc["hair"]["rms_error_mm"].get<double>(),
             acc["outside_hair"]["rms_error_mm"].get<double>());
-  for (const char* key : {"simulate_s", "clean_s", "grid_mesh_s", "total_s"})
+  EXPECT_LT(report["curvature"]["median_rel_error_H_outside_hair_where_abs_H_above_0.005"].get<double>(), 0.15);
+  EXPECT_LT(report["curvature"]["median_normal_error_deg_outside_hair"].get<double>(), 1.0);
+  for (const char* key : {"simulate_s", "clean_s", "grid_mesh_s", "curvature_s", "total_s"})
     EXPECT_TRUE(report["timings"].contains(key)) << key;
   EXPECT_TRUE(report["versions"].contains("scanmesh"));
 }
@@ -155,7 +159,8 @@ TEST_F(Demo, InfoDescribesTheGridAndTheMesh) {
 }
 
 TEST(Cli, EverySubcommandHasHelp) {
-  for (const char* sub : {"sim", "info", "export", "clean", "grid-mesh", "render", "demo"}) {
+  for (const char* sub :
+       {"sim", "info", "export", "clean", "grid-mesh", "render", "curvature", "demo"}) {
     const RunResult r = run(std::string(sub) + " --help");
     EXPECT_EQ(r.exit_code, 0) << sub;
     EXPECT_NE(r.output.find("Usage"), std::string::npos) << sub;
@@ -212,6 +217,46 @@ TEST(Cli, SimThenExportThenGridMeshOnASmallScanner) {
           " --size 64");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(read_png(dir / "r2.png").width, 64);
+}
+
+TEST(Cli, CurvatureWritesFieldsPicturesAndReportForEachMethod) {
+  const fs::path dir = scratch_dir("curvature");
+  std::ofstream(dir / "scanner.yaml")
+      << "n_phi: 96\nn_h: 64\nradius_mm: 300\nh0_mm: 20\ndh_mm: 2.5\n"
+         "noise_sigma_mm: 0.05\nseed: 3\n";
+  const std::string grid = (dir / "g.smg").string();
+  RunResult r = run("sim --scanner " + (dir / "scanner.yaml").string() + " --out " + grid);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* method : {"analytic", "seed"}) {
+    const fs::path out = dir / method;
+    r = run("curvature " + grid + " --out " + out.string() + " --method " + method);
+    ASSERT_EQ(r.exit_code, 0) << method << "\n" << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+    const bool seed = std::string(method) == "seed";
+    std::vector<std::string> expected = {"fields.smf", "curvature_grey.png", "curvature.json"};
+    if (!seed)
+      expected.insert(expected.end(), {"mean_curvature.png", "gauss_curvature.png", "normals.png"});
+    for (const auto& f : expected) EXPECT_TRUE(fs::exists(out / f)) << method << ": " << f;
+    std::ifstream in(out / "curvature.json");
+    const nlohmann::json report = nlohmann::json::parse(in);
+    EXPECT_EQ(report["method"], seed ? "seed000" : "analytic");
+    EXPECT_GT(report["counts"]["defined_cells"].get<long>(), 96 * 64 / 4) << method;
+    EXPECT_LE(report["counts"]["defined_cells"].get<long>(),
+              report["counts"]["valid_cells"].get<long>());
+    EXPECT_TRUE(report["percentiles"]["k1"].contains("p50")) << method;
+    EXPECT_TRUE(report["timings"].contains("total_s"));
+    const Image8 grey = read_png(out / "curvature_grey.png");
+    EXPECT_EQ(grey.width, 96);
+    EXPECT_EQ(grey.height, 64);
+    if (!seed) {
+      EXPECT_EQ(read_png(out / "mean_curvature.png").width, 96 + 70);
+    }
+  }
+  EXPECT_FALSE(fs::exists(dir / "seed" / "normals.png"));
+  r = run("curvature " + grid + " --out " + (dir / "bogus").string() + " --method bogus");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "bogus"));
 }
 
 }  // namespace

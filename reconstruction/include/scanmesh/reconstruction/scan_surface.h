@@ -1,6 +1,7 @@
-// The continuous scan surface over a RangeGrid: a C1 piecewise-bicubic (Catmull-Rom / cubic
-// Hermite with central-difference tangents) interpolant of r(phi, h) that wraps in phi and is
-// defined only where its whole 4 x 4 support is valid, so it never bridges a hole.
+// The continuous scan surface over a RangeGrid: a C1 piecewise-bicubic Hermite interpolant of
+// r(phi, h) (Catmull-Rom: node slopes and twist from central differences) that wraps in phi.
+// A patch is defined only where its four corner cells are valid, and node slopes next to a hole
+// are one-sided, so the surface never reads or bridges an invalid cell.
 //
 // Why: seed 000 §6.1.2 found pixel-based curvature unusable (staircase values 40-80x too high) and
 // asked for a continuous surface with float coordinates. docs/reconstruction.md has the details.
@@ -42,7 +43,7 @@ SurfaceJet lift(double phi, double h, const RadiusJet& r);
 
 //! One root of a ray or segment with the surface.
 struct SurfaceHit {
-  double t = 0;    //!< parameter along origin + t * direction
+  double t = 0;  //!< parameter along origin + t * direction
   Eigen::Vector3d point = Eigen::Vector3d::Zero();
   double phi = 0, h = 0;
 };
@@ -73,7 +74,7 @@ class ScanSurface {
   double phi0() const { return phi0_; }
   double h0() const { return h0_; }
 
-  //! True where the interpolant is defined: all 16 cells of the bicubic support are valid.
+  //! True where the interpolant is defined: the four corners of the patch are valid.
   bool defined(double phi, double h) const;
 
   //! Bicubic r and its derivatives at any (phi, h); nullopt where not defined.
@@ -88,7 +89,7 @@ class ScanSurface {
 
   //! Every root t in [t_min, t_max] of the segment origin + t * direction with the surface,
   //! in increasing order. The segment is sampled at steps below `max_step_mm` (default: a
-  //! quarter of the finer cell size) and each sign change of F is refined by bisection to
+  //! quarter of the finest cell) and each sign change of F is refined by bisection to
   //! `tolerance_mm`; a tangential touch that changes no sign between samples is not reported.
   std::vector<SurfaceHit> intersect_segment(const Eigen::Vector3d& origin,
                                             const Eigen::Vector3d& direction, double t_min,
@@ -125,6 +126,7 @@ class ScanSurface {
   std::vector<std::uint8_t> valid_;
   // support_ok_[index(i, j)]: the 4 x 4 support of the patch [i, i+1] x [j, j+1] is valid.
   std::vector<std::uint8_t> support_ok_;
+  double sampling_step_mm_ = 0;  // root-search step: a quarter of the finest cell
 };
 
 }  // namespace scanmesh

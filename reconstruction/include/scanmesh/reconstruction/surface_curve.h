@@ -25,7 +25,7 @@ class SurfaceCurve {
                CurveKind kind = CurveKind::CatmullRom, bool closed = false);
 
   double t_max() const;
-  //! (phi, h) at parameter t, and its first and second derivatives d/dt.
+  //! (phi, h) at parameter t.
   Eigen::Vector2d parameter_point(double t) const;
   //! The lifted 3D point; nullopt where the surface is undefined.
   std::optional<Eigen::Vector3d> point(double t) const;
@@ -49,11 +49,17 @@ class SurfaceCurve {
   Derivs parameter_derivatives(double t) const;
   std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> lifted_derivatives(double t) const;
   double speed(double t) const;
+  //! Control point k for any integer k: wraps (with the period shift) when closed, extends
+  //! linearly past the ends when open.
+  Eigen::Vector2d control(int k) const;
+  double knot(int k) const;
 
   const ScanSurface& surface_;
   std::vector<Eigen::Vector2d> points_;
   CurveKind kind_;
   bool closed_;
+  double period_shift_ = 0;    //!< phi added per trip round a closed curve (0 or +-2 pi)
+  std::vector<double> knots_;  //!< centripetal knots of control(0) .. control(last)
 };
 
 }  // namespace scanmesh
