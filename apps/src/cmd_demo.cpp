@@ -2,8 +2,8 @@
 //   simulated scan -> cleaned grid -> grid mesh -> mesh files, pictures, report.json
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <iostream>
+#include <numbers>
 
 #include "cli_support.h"
 #include "commands.h"
@@ -74,8 +74,9 @@ nlohmann::json curvature_against_truth(const SurfaceFields& f, const sim::Simula
   for (std::size_t k = 0; k < f.size(); ++k) {
     if (!f.defined[k] || scene.in_hair_zone(scan.truth[k].point)) continue;
     const auto& t = scan.truth[k].geometry;
-    normal_deg.push_back(std::acos(std::clamp(f.normal[k].cast<double>().dot(t.normal), -1.0, 1.0)) *
-                         180.0 / std::numbers::pi);
+    normal_deg.push_back(
+        std::acos(std::clamp(f.normal[k].cast<double>().dot(t.normal), -1.0, 1.0)) * 180.0 /
+        std::numbers::pi);
     if (std::abs(t.mean_curvature()) > 0.005)
       h_err.push_back(std::abs(f.mean(k) - t.mean_curvature()) / std::abs(t.mean_curvature()));
   }
@@ -138,7 +139,7 @@ int run_demo(const DemoArgs& args) {
   timings["write_files_s"] = t.seconds();
 
   t = {};
-  const SurfaceFields fields = compute_fields_quadric(grid);
+  const SurfaceFields fields = compute_fields_grid_quadric(grid);
   timings["curvature_s"] = t.seconds();
   write_fields(out / "fields.smf", fields);
   std::vector<float> mean(fields.size());

@@ -58,7 +58,7 @@ int run_render(const RenderArgs& args);
 struct CurvatureArgs {
   std::string grid;
   std::string out;                  //!< output directory
-  std::string method = "analytic";  //!< analytic | quadric | seed
+  std::string method = "grid-quadric";  //!< analytic | grid-quadric | quadric | seed
   double radius_mm = 0;             //!< quadric neighbourhood radius; <= 0: the default
 };
 int run_curvature(const CurvatureArgs& args);

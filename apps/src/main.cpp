@@ -98,9 +98,11 @@ int main(int argc, char** argv) {
       "curvature", "Normals and curvature of a grid: fields file, pictures and curvature.json");
   curv_cmd->add_option("grid", curv.grid, "Grid file (.smg)")->required();
   curv_cmd->add_option("-o,--out", curv.out, "Output folder")->required();
-  curv_cmd->add_option("--method", curv.method, "analytic, quadric or seed (seed 000's operator)")
+  curv_cmd
+      ->add_option("--method", curv.method,
+                   "analytic, grid-quadric, quadric or seed (seed 000's operator)")
       ->capture_default_str()
-      ->check(CLI::IsMember({"analytic", "quadric", "seed", "seed000"}));
+      ->check(CLI::IsMember({"analytic", "grid-quadric", "quadric", "seed", "seed000"}));
   curv_cmd
       ->add_option("--radius", curv.radius_mm,
                    "Neighbourhood radius of the quadric fit (mm; 0: default)")

@@ -37,6 +37,8 @@ std::uint32_t method_code(CurvatureMethod m) {
       return 1;
     case CurvatureMethod::Seed000:
       return 2;
+    case CurvatureMethod::GridQuadric:
+      return 3;
   }
   throw InvalidInputError("unknown curvature method");
 }
@@ -144,7 +146,7 @@ SurfaceFields decode_fields(std::span<const std::uint8_t> bytes,
 
   // 5. Header values.
   const std::uint32_t method = read_le_u32(p + 28);
-  if (method > 2) fail("curvature method " + std::to_string(method) + " is unknown (0, 1 or 2)");
+  if (method > 3) fail("curvature method " + std::to_string(method) + " is unknown (0 to 3)");
   const double radius_mm = read_le_f64(p + 32);
   if (!std::isfinite(radius_mm) || radius_mm < 0)
     fail("radius_mm " + std::to_string(radius_mm) + " is not finite and >= 0");
@@ -180,7 +182,8 @@ SurfaceFields decode_fields(std::span<const std::uint8_t> bytes,
   f.resize(static_cast<int>(n_phi), static_cast<int>(n_h));
   f.method = method == 0   ? CurvatureMethod::Analytic
              : method == 1 ? CurvatureMethod::Quadric
-                           : CurvatureMethod::Seed000;
+             : method == 2 ? CurvatureMethod::Seed000
+                           : CurvatureMethod::GridQuadric;
   f.radius_mm = radius_mm;
   const auto vec3 = [](const std::uint8_t* plane, std::size_t k) {
     return Eigen::Vector3f(read_le_f32(plane + 12 * k), read_le_f32(plane + 12 * k + 4),

@@ -6,7 +6,10 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
+#include <optional>
 #include <string>
 
 #include "scanmesh/core/errors.h"
@@ -126,6 +129,78 @@ Eigen::Vector3d pca_normal(const std::vector<Eigen::Vector3d>& pts,
   return n.dot(outward) < 0 ? Eigen::Vector3d(-n) : n;
 }
 
+// The 3D quadric estimate at one cell, or nullopt if it has too few neighbours.
+std::optional<SurfaceCurvature> quadric_at(const RangeGrid& grid,
+                                           const std::vector<Eigen::Vector3d>& positions, int i,
+                                           int j, const QuadricOptions& options,
+                                           std::vector<Eigen::Vector3d>& pts) {
+  gather_neighbours(grid, positions, i, j, options.radius_mm, pts);
+  if (static_cast<int>(pts.size()) < options.min_points) return std::nullopt;
+  const Eigen::Vector3d& origin = positions[grid.index(i, j)];
+  const Eigen::Vector3d outward(std::cos(grid.phi(i)), std::sin(grid.phi(i)), 0.0);
+  // Two passes: the second fits in the frame of the first fit's normal, which makes the height
+  // function flatter and the fit less biased on steep parts.
+  auto c = fit_quadric(pts, origin, pca_normal(pts, outward), options.radius_mm);
+  if (c) c = fit_quadric(pts, origin, c->normal, options.radius_mm);
+  return c;
+}
+
+void check_quadric_options(const QuadricOptions& options) {
+  if (!(options.radius_mm > 0) || !std::isfinite(options.radius_mm))
+    throw InvalidInputError("quadric curvature: neighbourhood radius must be positive, got " +
+                            std::to_string(options.radius_mm) + " mm");
+  if (options.min_points < 6)
+    throw InvalidInputError(
+        "quadric curvature: min_points must be >= 6 (a quadric has 6 "
+        "coefficients), got " +
+        std::to_string(options.min_points));
+}
+
+// ---- grid quadric: separable least squares in (u, v) = (column, row) offsets ----------------
+
+// Running sums along phi (wrapping) of k_a(u) * x(i + u, j) for the kernels u^0, u^1, u^2.
+void sum_along_phi(const std::vector<double>& x, int n_phi, int n_h, int w,
+                   std::array<std::vector<double>, 3>& out) {
+  for (auto& o : out) o.assign(x.size(), 0.0);
+  for (int j = 0; j < n_h; ++j)
+    for (int i = 0; i < n_phi; ++i) {
+      double s0 = 0, s1 = 0, s2 = 0;
+      for (int u = -w; u <= w; ++u) {
+        const int ii = ((i + u) % n_phi + n_phi) % n_phi;
+        const double v = x[static_cast<std::size_t>(j) * n_phi + ii];
+        s0 += v;
+        s1 += u * v;
+        s2 += u * u * v;
+      }
+      const std::size_t k = static_cast<std::size_t>(j) * n_phi + i;
+      out[0][k] = s0;
+      out[1][k] = s1;
+      out[2][k] = s2;
+    }
+}
+
+// Sum along h of v^b * x(i, j + v) for |v| <= w; rows whose window leaves the grid get NaN.
+std::vector<double> sum_along_h(const std::vector<double>& x, int n_phi, int n_h, int w, int b) {
+  std::vector<double> out(x.size(), std::numeric_limits<double>::quiet_NaN());
+  for (int j = w; j + w < n_h; ++j)
+    for (int i = 0; i < n_phi; ++i) {
+      double s = 0;
+      for (int v = -w; v <= w; ++v)
+        s += (b == 0 ? 1.0 : b == 1 ? v : v * v) * x[static_cast<std::size_t>(j + v) * n_phi + i];
+      out[static_cast<std::size_t>(j) * n_phi + i] = s;
+    }
+  return out;
+}
+
+double median_radius(const RangeGrid& grid) {
+  std::vector<float> r;
+  for (std::size_t k = 0; k < grid.cell_count(); ++k)
+    if (grid.validity()[k]) r.push_back(grid.radii()[k]);
+  if (r.empty()) return 0.0;
+  std::nth_element(r.begin(), r.begin() + r.size() / 2, r.end());
+  return r[r.size() / 2];
+}
+
 }  // namespace
 
 SurfaceFields compute_fields_analytic(const RangeGrid& grid) {
@@ -143,14 +218,7 @@ SurfaceFields compute_fields_analytic(const RangeGrid& grid) {
 }
 
 SurfaceFields compute_fields_quadric(const RangeGrid& grid, const QuadricOptions& options) {
-  if (!(options.radius_mm > 0) || !std::isfinite(options.radius_mm))
-    throw InvalidInputError("quadric curvature: neighbourhood radius must be positive, got " +
-                            std::to_string(options.radius_mm) + " mm");
-  if (options.min_points < 6)
-    throw InvalidInputError(
-        "quadric curvature: min_points must be >= 6 (a quadric has 6 "
-        "coefficients), got " +
-        std::to_string(options.min_points));
+  check_quadric_options(options);
   SurfaceFields f;
   f.resize(grid.n_phi(), grid.n_h());
   f.method = CurvatureMethod::Quadric;
@@ -161,17 +229,78 @@ SurfaceFields compute_fields_quadric(const RangeGrid& grid, const QuadricOptions
     std::vector<Eigen::Vector3d> pts;
 #pragma omp for schedule(dynamic, 4)
     for (int j = 0; j < grid.n_h(); ++j)
-      for (int i = 0; i < grid.n_phi(); ++i) {
-        if (!grid.valid(i, j)) continue;
-        gather_neighbours(grid, positions, i, j, options.radius_mm, pts);
-        if (static_cast<int>(pts.size()) < options.min_points) continue;
-        const Eigen::Vector3d& origin = positions[grid.index(i, j)];
-        const Eigen::Vector3d outward(std::cos(grid.phi(i)), std::sin(grid.phi(i)), 0.0);
-        // Two passes: the second fits in the frame of the first fit's normal, which makes the
-        // height function flatter and the fit less biased on steep parts.
-        auto c = fit_quadric(pts, origin, pca_normal(pts, outward), options.radius_mm);
-        if (c) c = fit_quadric(pts, origin, c->normal, options.radius_mm);
-        if (c) store(f, grid.index(i, j), *c);
+      for (int i = 0; i < grid.n_phi(); ++i)
+        if (grid.valid(i, j))
+          if (const auto c = quadric_at(grid, positions, i, j, options, pts))
+            store(f, grid.index(i, j), *c);
+  }
+  return f;
+}
+
+SurfaceFields compute_fields_grid_quadric(const RangeGrid& grid, const QuadricOptions& options) {
+  check_quadric_options(options);
+  SurfaceFields f;
+  f.resize(grid.n_phi(), grid.n_h());
+  f.method = CurvatureMethod::GridQuadric;
+  f.radius_mm = options.radius_mm;
+  const int n_phi = grid.n_phi(), n_h = grid.n_h();
+  const double r_med = median_radius(grid);
+  if (r_med <= 0) return f;
+  const int wv = std::max(1, static_cast<int>(std::lround(options.radius_mm / grid.dh())));
+  const int wu = std::clamp(
+      static_cast<int>(std::lround(options.radius_mm / (r_med * grid.dphi()))), 1, n_phi / 4);
+
+  // Radius plane with holes as 0 and an "invalid" plane: a window is usable where the box sum
+  // of the invalid plane is 0.
+  std::vector<double> r(grid.cell_count()), invalid(grid.cell_count());
+  for (std::size_t k = 0; k < r.size(); ++k) {
+    r[k] = grid.validity()[k] ? grid.radii()[k] : 0.0;
+    invalid[k] = grid.validity()[k] ? 0.0 : 1.0;
+  }
+  std::array<std::vector<double>, 3> ru, iu;
+  sum_along_phi(r, n_phi, n_h, wu, ru);
+  sum_along_phi(invalid, n_phi, n_h, wu, iu);
+  const std::vector<double> holes = sum_along_h(iu[0], n_phi, n_h, wv, 0);
+  const std::vector<double> s00 = sum_along_h(ru[0], n_phi, n_h, wv, 0);
+  const std::vector<double> s01 = sum_along_h(ru[0], n_phi, n_h, wv, 1);
+  const std::vector<double> s02 = sum_along_h(ru[0], n_phi, n_h, wv, 2);
+  const std::vector<double> s10 = sum_along_h(ru[1], n_phi, n_h, wv, 0);
+  const std::vector<double> s11 = sum_along_h(ru[1], n_phi, n_h, wv, 1);
+  const std::vector<double> s20 = sum_along_h(ru[2], n_phi, n_h, wv, 0);
+
+  // Full-window moments: the odd terms decouple, (c0, cuu, cvv) solve one fixed 3 x 3 system.
+  const double nu = 2.0 * wu + 1, nv = 2.0 * wv + 1;
+  const double u2 = wu * (wu + 1.0) * (2.0 * wu + 1) / 3.0,
+               v2 = wv * (wv + 1.0) * (2.0 * wv + 1) / 3.0;
+  auto fourth = [](double w) { return w * (w + 1) * (2 * w + 1) * (3 * w * w + 3 * w - 1) / 15.0; };
+  const double u4 = fourth(wu), v4 = fourth(wv);
+  Eigen::Matrix3d even;
+  even << nu * nv, u2 * nv, v2 * nu, u2 * nv, u4 * nv, u2 * v2, v2 * nu, u2 * v2, v4 * nu;
+  const Eigen::Matrix3d even_inverse = even.inverse();
+
+  const std::vector<Eigen::Vector3d> positions = cell_positions(grid);
+#pragma omp parallel
+  {
+    std::vector<Eigen::Vector3d> pts;
+#pragma omp for schedule(dynamic, 4)
+    for (int j = 0; j < n_h; ++j)
+      for (int i = 0; i < n_phi; ++i) {
+        const std::size_t k = grid.index(i, j);
+        if (!grid.validity()[k]) continue;
+        if (!(holes[k] == 0.0)) {  // NaN (window leaves the rows) or a hole inside
+          if (const auto c = quadric_at(grid, positions, i, j, options, pts)) store(f, k, *c);
+          continue;
+        }
+        const Eigen::Vector3d c_even = even_inverse * Eigen::Vector3d(s00[k], s20[k], s02[k]);
+        const double du = grid.dphi(), dv = grid.dh();
+        RadiusJet jet;
+        jet.r = c_even(0);
+        jet.r_phi = s10[k] / (u2 * nv) / du;
+        jet.r_h = s01[k] / (v2 * nu) / dv;
+        jet.r_phiphi = 2.0 * c_even(1) / (du * du);
+        jet.r_phih = s11[k] / (u2 * v2) / (du * dv);
+        jet.r_hh = 2.0 * c_even(2) / (dv * dv);
+        store(f, k, lift(grid.phi(i), grid.h(j), jet).curvature());
       }
   }
   return f;
@@ -181,10 +310,12 @@ SurfaceFields compute_fields(const RangeGrid& grid, CurvatureMethod method, doub
   switch (method) {
     case CurvatureMethod::Analytic:
       return compute_fields_analytic(grid);
-    case CurvatureMethod::Quadric: {
+    case CurvatureMethod::Quadric:
+    case CurvatureMethod::GridQuadric: {
       QuadricOptions o;
       if (radius_mm > 0) o.radius_mm = radius_mm;
-      return compute_fields_quadric(grid, o);
+      return method == CurvatureMethod::Quadric ? compute_fields_quadric(grid, o)
+                                                : compute_fields_grid_quadric(grid, o);
     }
     case CurvatureMethod::Seed000: {
       const MaxCurvatureMap m = seed000_max_curvature(grid);

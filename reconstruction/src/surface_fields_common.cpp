@@ -10,9 +10,10 @@ namespace scanmesh {
 CurvatureMethod parse_curvature_method(const std::string& name) {
   if (name == "analytic") return CurvatureMethod::Analytic;
   if (name == "quadric") return CurvatureMethod::Quadric;
+  if (name == "grid-quadric") return CurvatureMethod::GridQuadric;
   if (name == "seed" || name == "seed000") return CurvatureMethod::Seed000;
   throw InvalidInputError("unknown curvature method '" + name +
-                          "' (expected analytic, quadric or seed)");
+                          "' (expected analytic, grid-quadric, quadric or seed)");
 }
 
 std::string to_string(CurvatureMethod m) {
@@ -23,6 +24,8 @@ std::string to_string(CurvatureMethod m) {
       return "quadric";
     case CurvatureMethod::Seed000:
       return "seed000";
+    case CurvatureMethod::GridQuadric:
+      return "grid-quadric";
   }
   return "unknown";
 }

@@ -67,9 +67,9 @@ RunResult* Demo::result_ = nullptr;
 
 TEST_F(Demo, ProducesEveryListedFile) {
   ASSERT_EQ(result_->exit_code, 0) << result_->output;
-  for (const char* name : {"scan_raw.smg", "scan.smg", "scan.pcd", "mesh.ply", "mesh.obj",
-                           "mesh.mtl", "texture.png", "depth.png", "render.png", "fields.smf", "curvature.png",
-                           "report.json"}) {
+  for (const char* name :
+       {"scan_raw.smg", "scan.smg", "scan.pcd", "mesh.ply", "mesh.obj", "mesh.mtl", "texture.png",
+        "depth.png", "render.png", "fields.smf", "curvature.png", "report.json"}) {
     EXPECT_TRUE(fs::exists(*out_ / name)) << name;
     EXPECT_GT(fs::file_size(*out_ / name), 50u) << name;
   }
@@ -98,7 +98,9 @@ TEST_F(Demo, ReportDescribesTheRunAndItsAccuracy) {
   EXPECT_LT(std::abs(acc["outside_hair"]["mean_error_mm"].get<double>()), 0.02);
   EXPECT_GT(acc["hair"]["rms_error_mm"].get<double>(),
             acc["outside_hair"]["rms_error_mm"].get<double>());
-  EXPECT_LT(report["curvature"]["median_rel_error_H_outside_hair_where_abs_H_above_0.005"].get<double>(), 0.15);
+  EXPECT_LT(
+      report["curvature"]["median_rel_error_H_outside_hair_where_abs_H_above_0.005"].get<double>(),
+      0.15);
   EXPECT_LT(report["curvature"]["median_normal_error_deg_outside_hair"].get<double>(), 1.0);
   for (const char* key : {"simulate_s", "clean_s", "grid_mesh_s", "curvature_s", "total_s"})
     EXPECT_TRUE(report["timings"].contains(key)) << key;
@@ -227,7 +229,7 @@ TEST(Cli, CurvatureWritesFieldsPicturesAndReportForEachMethod) {
   const std::string grid = (dir / "g.smg").string();
   RunResult r = run("sim --scanner " + (dir / "scanner.yaml").string() + " --out " + grid);
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  for (const char* method : {"analytic", "seed"}) {
+  for (const char* method : {"analytic", "grid-quadric", "quadric", "seed"}) {
     const fs::path out = dir / method;
     r = run("curvature " + grid + " --out " + out.string() + " --method " + method);
     ASSERT_EQ(r.exit_code, 0) << method << "\n" << r.output;

@@ -120,6 +120,27 @@ TEST(SurfaceFields, QuadricSphereWithNoiseWithinFivePercent) {
   EXPECT_LT(median(e.normal_deg), 0.5);
 }
 
+TEST(SurfaceFields, GridQuadricSphereWithNoiseWithinFivePercent) {
+  const auto scan = test::sphere_scan(0.05);
+  const SurfaceFields f = compute_fields_grid_quadric(scan.grid);
+  const RelativeErrors e = compare(scan, f, 8, 1.0 / 80.0);
+  ASSERT_GT(e.k1.size(), 100000u);
+  EXPECT_LT(median(e.k1), 0.05);
+  EXPECT_LT(median(e.k2), 0.05);
+  EXPECT_LT(median(e.normal_deg), 0.5);
+}
+
+TEST(SurfaceFields, GridQuadricOnExactDataAgreesWithTheAnalyticMethod) {
+  const auto scan = test::sphere_scan();
+  const SurfaceFields a = compute_fields_analytic(scan.grid);
+  const SurfaceFields g = compute_fields_grid_quadric(scan.grid);
+  const RelativeErrors e = compare(scan, g, 3, 1.0 / 80.0);
+  EXPECT_LT(median(e.k1), 0.01);
+  EXPECT_LT(median(e.k2), 0.01);
+  // Next to holes and rims it falls back to the 3D fit, so it defines at least as many cells.
+  EXPECT_GE(g.defined_count(), a.defined_count());
+}
+
 TEST(SurfaceFields, PrincipalDirectionsAreOrthonormalTangents) {
   const auto scan = test::sphere_scan();
   const SurfaceFields f = compute_fields(scan.grid, CurvatureMethod::Analytic);

@@ -1,7 +1,9 @@
 // Per-cell normals and curvatures of a scan, by one of three methods (docs/reconstruction.md):
-//   analytic  - from the continuous surface's derivatives at each node (default, exact data)
-//   quadric   - least-squares quadric fit in 3D over a neighbourhood radius (noisy data)
-//   seed000   - seed 000's 7x7 / 12-direction maximum-curvature operator (legacy; k1 only)
+//   analytic     - from the continuous surface's derivatives at each node (default, exact data)
+//   grid-quadric - least-squares quadratic of r(phi, h) over a window of cells, computed with
+//                  separable running sums (noisy data, fast); 3D quadric next to holes
+//   quadric      - least-squares quadric fit in 3D over a neighbourhood radius (noisy data)
+//   seed000      - seed 000's 7x7 / 12-direction maximum-curvature operator (legacy; k1 only)
 #pragma once
 
 #include <Eigen/Core>
@@ -14,9 +16,10 @@
 
 namespace scanmesh {
 
-enum class CurvatureMethod { Analytic, Quadric, Seed000 };
+enum class CurvatureMethod { Analytic, Quadric, Seed000, GridQuadric };
 
-//! Parses "analytic" | "quadric" | "seed"/"seed000"; throws InvalidInputError otherwise.
+//! Parses "analytic" | "grid-quadric" | "quadric" | "seed"/"seed000"; throws InvalidInputError
+//! otherwise.
 CurvatureMethod parse_curvature_method(const std::string& name);
 std::string to_string(CurvatureMethod m);
 
@@ -46,7 +49,14 @@ struct QuadricOptions {
 SurfaceFields compute_fields_analytic(const RangeGrid& grid);
 SurfaceFields compute_fields_quadric(const RangeGrid& grid, const QuadricOptions& options = {});
 
-//! Dispatches on the method; `radius_mm` is used by quadric only (<= 0: default).
+//! Least-squares quadratic r(u, v) = c0 + cu u + cv v + cuu u^2 + cuv uv + cvv v^2 over the
+//! (2 Wu + 1) x (2 Wv + 1) cells around each node, Wv = radius / dh and Wu = radius / (r_median
+//! dphi). On a full window the normal equations decouple into six separable running sums, so
+//! the cost per cell is independent of the neighbourhood size's square. Cells whose window
+//! touches a hole or the grid's top or bottom fall back to compute_fields_quadric's 3D fit.
+SurfaceFields compute_fields_grid_quadric(const RangeGrid& grid, const QuadricOptions& options = {});
+
+//! Dispatches on the method; `radius_mm` is used by the quadric methods only (<= 0: default).
 SurfaceFields compute_fields(const RangeGrid& grid, CurvatureMethod method, double radius_mm = 0);
 
 }  // namespace scanmesh
