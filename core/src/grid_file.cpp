@@ -30,12 +30,6 @@ constexpr std::size_t kCrcBytes = 4;
 // radius f32 + valid u8 + confidence f32 + rgb 3 x u8
 constexpr std::uint64_t kBytesPerCell = 12;
 
-std::string hex32(std::uint32_t v) {
-  char buf[16];
-  std::snprintf(buf, sizeof buf, "0x%08x", v);
-  return buf;
-}
-
 std::string cell_name(std::size_t k, std::uint32_t n_phi) {
   return "cell (" + std::to_string(k % n_phi) + ", " + std::to_string(k / n_phi) + ")";
 }
@@ -109,26 +103,15 @@ RangeGrid decode_grid(std::span<const std::uint8_t> bytes, const std::filesystem
     fail("grid size " + std::to_string(n_phi) + " x " + std::to_string(n_h) +
          " is impossible (at least 2 x 2)");
   const std::uint64_t cells = static_cast<std::uint64_t>(n_phi) * n_h;
-  if (cells > kMaxGridCells)
-    fail("grid size " + std::to_string(n_phi) + " x " + std::to_string(n_h) +
-         " exceeds the limit of " + std::to_string(kMaxGridCells) + " cells");
+  require_cell_limit(n_phi, n_h, kMaxGridCells, source);
   if (header_length < kFixedHeaderBytes)
     fail("header length " + std::to_string(header_length) + " is shorter than the fixed header (" +
          std::to_string(kFixedHeaderBytes) + " bytes)");
   const std::uint64_t expected = header_length + kBytesPerCell * cells + kCrcBytes;
-  if (size < expected)
-    fail("truncated: expected " + std::to_string(expected) + " bytes, file has " +
-         std::to_string(size));
-  if (size > expected)
-    fail("trailing garbage: expected " + std::to_string(expected) + " bytes, file has " +
-         std::to_string(size));
+  require_file_size(expected, size, source);
 
   // 4. Checksum over everything before it.
-  const std::uint32_t stored_crc = read_le_u32(p + size - kCrcBytes);
-  const std::uint32_t actual_crc = crc32_of(p, size - kCrcBytes);
-  if (stored_crc != actual_crc)
-    fail("checksum mismatch (stored " + hex32(stored_crc) + ", computed " + hex32(actual_crc) +
-         "): the file is corrupt");
+  require_trailing_crc32(bytes, source);
 
   // 5. Geometry.
   const double phi0 = read_le_f64(p + 32), h0 = read_le_f64(p + 40), dh = read_le_f64(p + 48);

@@ -43,12 +43,6 @@ std::uint32_t method_code(CurvatureMethod m) {
   throw InvalidInputError("unknown curvature method");
 }
 
-std::string hex32(std::uint32_t v) {
-  char buf[16];
-  std::snprintf(buf, sizeof buf, "0x%08x", v);
-  return buf;
-}
-
 std::string cell_name(std::size_t k, std::uint32_t n_phi) {
   return "cell (" + std::to_string(k % n_phi) + ", " + std::to_string(k / n_phi) + ")";
 }
@@ -126,23 +120,12 @@ SurfaceFields decode_fields(std::span<const std::uint8_t> bytes,
   if (n_phi < 1 || n_h < 1)
     fail("grid size " + std::to_string(n_phi) + " x " + std::to_string(n_h) + " is impossible");
   const std::uint64_t cells = static_cast<std::uint64_t>(n_phi) * n_h;
-  if (cells > kMaxGridCells)
-    fail("grid size " + std::to_string(n_phi) + " x " + std::to_string(n_h) +
-         " exceeds the limit of " + std::to_string(kMaxGridCells) + " cells");
+  require_cell_limit(n_phi, n_h, kMaxGridCells, source);
   const std::uint64_t expected = kHeaderBytes + kBytesPerCell * cells + kCrcBytes;
-  if (size < expected)
-    fail("truncated: expected " + std::to_string(expected) + " bytes, file has " +
-         std::to_string(size));
-  if (size > expected)
-    fail("trailing garbage: expected " + std::to_string(expected) + " bytes, file has " +
-         std::to_string(size));
+  require_file_size(expected, size, source);
 
   // 4. Checksum over everything before it.
-  const std::uint32_t stored_crc = read_le_u32(p + size - kCrcBytes);
-  const std::uint32_t actual_crc = crc32_of(p, size - kCrcBytes);
-  if (stored_crc != actual_crc)
-    fail("checksum mismatch (stored " + hex32(stored_crc) + ", computed " + hex32(actual_crc) +
-         "): the file is corrupt");
+  require_trailing_crc32(bytes, source);
 
   // 5. Header values.
   const std::uint32_t method = read_le_u32(p + 28);

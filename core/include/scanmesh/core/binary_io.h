@@ -8,6 +8,8 @@
 #include <bit>
 #include <cstddef>
 #include <cstdint>
+#include <filesystem>
+#include <span>
 #include <vector>
 
 namespace scanmesh {
@@ -49,5 +51,17 @@ inline double read_le_f64(const std::uint8_t* p) { return std::bit_cast<double>(
 //! CRC-32 (zlib `crc32`, the PNG / zip polynomial) of n bytes. Not inline: zlib is linked
 //! privately into scanmesh_core only.
 std::uint32_t crc32_of(const std::uint8_t* p, std::size_t n);
+
+//! Checks a file's size and trailing CRC-32, the steps every scanmesh binary reader shares.
+//! Throw FileFormatError naming `source`: "truncated: expected N bytes, file has M",
+//! "trailing garbage: ...", "checksum mismatch (stored 0x..., computed 0x...): the file is
+//! corrupt".
+void require_file_size(std::uint64_t expected, std::size_t actual,
+                       const std::filesystem::path& source);
+void require_trailing_crc32(std::span<const std::uint8_t> bytes,
+                            const std::filesystem::path& source);
+//! Rejects n_phi x n_h grids above kMaxGridCells ("grid size A x B exceeds the limit ...").
+void require_cell_limit(std::uint32_t n_phi, std::uint32_t n_h, std::uint64_t max_cells,
+                        const std::filesystem::path& source);
 
 }  // namespace scanmesh
