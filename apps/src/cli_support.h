@@ -12,9 +12,10 @@ enum ExitCode : int {
   kSuccess = 0,
   kInternalError = 1,
   kUsageError = 2,
-  kInvalidInput = 3,  //!< impossible parameter or configuration value
-  kBadFile = 4,       //!< malformed, truncated or corrupt input file
-  kIoFailure = 5,     //!< the OS refused a read or write (missing file, disk full, ...)
+  kInvalidInput = 3,     //!< impossible parameter or configuration value
+  kBadFile = 4,          //!< malformed, truncated or corrupt input file
+  kIoFailure = 5,        //!< the OS refused a read or write (missing file, disk full, ...)
+  kNotEdgeManifold = 6,  //!< `scanmesh check`: the mesh has an edge with more than two faces
 };
 
 //! Runs a command; maps scanmesh's typed errors to an exit code and one line on stderr.

@@ -57,9 +57,9 @@ int run_render(const RenderArgs& args);
 
 struct CurvatureArgs {
   std::string grid;
-  std::string out;                  //!< output directory
+  std::string out;                      //!< output directory
   std::string method = "grid-quadric";  //!< analytic | grid-quadric | quadric | seed
-  double radius_mm = 0;             //!< quadric neighbourhood radius; <= 0: the default
+  double radius_mm = 0;                 //!< quadric neighbourhood radius; <= 0: the default
 };
 int run_curvature(const CurvatureArgs& args);
 
@@ -71,5 +71,41 @@ struct DemoArgs {
   GridMeshOptions meshing;
 };
 int run_demo(const DemoArgs& args);
+
+}  // namespace scanmesh::cli
+
+// --- point-cloud fans (seed 002) and the mesh checker: apps/src/cmd_fans.cpp ---
+#include "scanmesh/meshing/fans/fans.h"
+
+namespace scanmesh::cli {
+
+struct FansArgs {
+  std::string cloud;  //!< .ply, .pcd, .xyz/.txt/.pts or .smg (valid cells)
+  std::string out;
+  std::string render_png, histogram_png;
+  bool check = false;  //!< print the checker report of the result
+  FanOptions options;
+};
+int run_fans(const FansArgs& args);
+
+struct CheckArgs {
+  std::string mesh;
+  std::string histogram_png;
+  bool skip_intersections = false;
+};
+int run_check(const CheckArgs& args);
+
+struct ParticlesArgs {
+  std::string scene;  //!< static scene or animated skeleton YAML
+  std::string grid;   //!< scan mode: grid file
+  double edge = 0.0;  //!< R
+  bool adaptive = false;
+  int frames = 10;
+  int steps_per_frame = 20;
+  bool no_flips = false;
+  std::uint64_t seed = 1;
+  std::string out;
+};
+int run_particles(const ParticlesArgs& args);
 
 }  // namespace scanmesh::cli

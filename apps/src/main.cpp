@@ -109,6 +109,68 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
 
+  FansArgs fans;
+  auto* fans_cmd = app.add_subcommand(
+      "fans", "Mesh an unorganised point cloud with seed 002's point-cloud fans");
+  fans_cmd->add_option("cloud", fans.cloud, "Point cloud (.ply, .pcd, .xyz/.txt/.pts, .smg)")
+      ->required();
+  fans_cmd->add_option("-o,--out", fans.out, "Output mesh (.ply)")->required();
+  fans_cmd->add_option("--alpha", fans.options.alpha_deg, "Completeness angle (deg)")
+      ->capture_default_str();
+  fans_cmd->add_option("--dmax", fans.options.dmax_factor, "Largest search radius (x cell edge)")
+      ->capture_default_str();
+  fans_cmd->add_option("--k", fans.options.k, "Expected points per grid cell")
+      ->capture_default_str();
+  fans_cmd->add_option("--max-edge", fans.options.max_edge, "Longest edge (input units; 0: off)")
+      ->capture_default_str();
+  fans_cmd
+      ->add_option("--max-edge-factor", fans.options.max_edge_factor,
+                   "Longest edge as a multiple of the local spacing (0: off)")
+      ->capture_default_str();
+  fans_cmd
+      ->add_option("--max-normal-angle", fans.options.max_normal_angle_deg,
+                   "Largest angle between neighbouring normals (deg; 0: off)")
+      ->capture_default_str();
+  fans_cmd
+      ->add_option("--max-hole", fans.options.max_hole_edges,
+                   "Close holes left between fans up to this many edges (0: off)")
+      ->capture_default_str();
+  fans_cmd->add_flag("--pca-normals", fans.options.pca_normals, "PCA normals for every point");
+  fans_cmd->add_option("--threads", fans.options.threads, "Threads (0: all)")
+      ->capture_default_str();
+  fans_cmd->add_option("--render", fans.render_png, "Shaded picture of the mesh (PNG)");
+  fans_cmd->add_option("--histogram", fans.histogram_png, "Min-angle histogram (PNG)");
+  fans_cmd->add_flag("--check", fans.check, "Print the mesh checker's report");
+
+  CheckArgs check;
+  auto* check_cmd = app.add_subcommand(
+      "check", "Mesh checker: duplicates, non-manifold edges/vertices, self-intersections, holes");
+  check_cmd->add_option("mesh", check.mesh, "Mesh (.ply)")->required();
+  check_cmd->add_option("--histogram", check.histogram_png, "Min-angle histogram (PNG)");
+  check_cmd->add_flag("--no-intersections", check.skip_intersections,
+                      "Skip the self-intersection test");
+
+  ParticlesArgs particles;
+  auto* particles_cmd = app.add_subcommand(
+      "particles", "Seed 003 spring-network mesh of an implicit scene, animation or scan surface");
+  particles_cmd->add_option("scene", particles.scene, "Scene YAML (static or with keyframes)")
+      ->check(CLI::ExistingFile);
+  particles_cmd->add_option("--grid", particles.grid, "Mesh a scan's continuous surface (.smg)")
+      ->check(CLI::ExistingFile);
+  particles_cmd->add_option("--edge", particles.edge, "Target edge length R (mm)")
+      ->required()
+      ->check(CLI::PositiveNumber);
+  particles_cmd->add_flag("--adaptive", particles.adaptive, "Curvature-adaptive rest lengths");
+  particles_cmd->add_option("--frames", particles.frames, "Frames of an animated scene")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
+  particles_cmd->add_option("--steps", particles.steps_per_frame, "Iterations per frame")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
+  particles_cmd->add_flag("--no-flips", particles.no_flips, "Disable edge flips to valence 6");
+  particles_cmd->add_option("--seed", particles.seed, "Random seed")->capture_default_str();
+  particles_cmd->add_option("-o,--out", particles.out, "Output folder")->required();
+
   DemoArgs demo;
   auto* demo_cmd =
       app.add_subcommand("demo", "Simulated head scan -> clean grid -> mesh, pictures and report");
@@ -146,6 +208,9 @@ int main(int argc, char** argv) {
     if (*gm_cmd) return run_grid_mesh(gm);
     if (*render_cmd) return run_render(render);
     if (*curv_cmd) return run_curvature(curv);
+    if (*fans_cmd) return run_fans(fans);
+    if (*check_cmd) return run_check(check);
+    if (*particles_cmd) return run_particles(particles);
     return run_demo(demo);
   });
 }

@@ -246,6 +246,12 @@ std::optional<RayHit> Scene::intersect(const Vector3d& origin, const Vector3d& u
   return best;
 }
 
+Eigen::AlignedBox3d Scene::bounds() const {
+  Eigen::AlignedBox3d box;
+  for (const auto& o : objects) box.extend(o->bounds());
+  return box;
+}
+
 SurfaceGeometry Scene::geometry(const RayHit& hit) const {
   if (hit.object < 0 || hit.object >= static_cast<int>(objects.size()))
     throw InvalidInputError("ray hit refers to no object of scene '" + name + "'");

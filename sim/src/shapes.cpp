@@ -50,6 +50,10 @@ class Sphere final : public SceneObject {
     return detail::first_crossing(*iv, t_min, t_max);
   }
 
+  Eigen::AlignedBox3d bounds() const override {
+    return {c_ - Vector3d::Constant(r_), c_ + Vector3d::Constant(r_)};
+  }
+
  private:
   Vector3d c_;
   double r_;
@@ -95,6 +99,15 @@ class Cylinder final : public SceneObject {
     return detail::first_crossing(*iv, t_min, t_max);
   }
 
+  Eigen::AlignedBox3d bounds() const override {
+    if (!hl_) return {Vector3d::Constant(-1e12), Vector3d::Constant(1e12)};
+    // Per axis: the caps' centres reach hl |a_i|, the rims a further r sqrt(1 - a_i^2).
+    Vector3d extent;
+    for (int k = 0; k < 3; ++k)
+      extent(k) = *hl_ * std::abs(a_(k)) + r_ * std::sqrt(std::max(0.0, 1.0 - a_(k) * a_(k)));
+    return {c_ - extent, c_ + extent};
+  }
+
  private:
   Vector3d c_, a_;
   double r_;
@@ -120,6 +133,11 @@ class Ellipsoid final : public SceneObject {
     const auto iv = detail::quadratic_interval(d.dot(ds), q.dot(ds), q.dot(qs) - 1.0);
     if (!iv) return std::nullopt;
     return detail::first_crossing(*iv, t_min, t_max);
+  }
+
+  Eigen::AlignedBox3d bounds() const override {
+    const Vector3d radii = inv2_.cwiseInverse().cwiseSqrt();
+    return {c_ - radii, c_ + radii};
   }
 
  private:
@@ -190,6 +208,11 @@ class Torus final : public SceneObject {
     return std::nullopt;
   }
 
+  Eigen::AlignedBox3d bounds() const override {
+    const double reach = big_r_ + small_r_;
+    return {c_ - Vector3d::Constant(reach), c_ + Vector3d::Constant(reach)};
+  }
+
  private:
   Vector3d any_perpendicular() const {
     const Vector3d helper = std::abs(a_.x()) < 0.9 ? Vector3d::UnitX() : Vector3d::UnitY();
@@ -245,6 +268,8 @@ class Box final : public SceneObject {
     }
     return detail::first_crossing(iv, t_min, t_max);
   }
+
+  Eigen::AlignedBox3d bounds() const override { return {c_ - half_, c_ + half_}; }
 
  private:
   Vector3d c_, half_;

@@ -143,6 +143,17 @@ class Skeletal final : public SceneObject {
     return std::nullopt;
   }
 
+  // The support of every element (a sphere or capsule of its radius of influence).
+  Eigen::AlignedBox3d bounds() const override {
+    Eigen::AlignedBox3d box;
+    for (const Element& e : el_) {
+      const Vector3d reach = Vector3d::Constant(e.radius);
+      box.extend(e.a - reach).extend(e.a + reach);
+      if (e.type == SkeletonElement::Type::Segment) box.extend(e.b - reach).extend(e.b + reach);
+    }
+    return box;
+  }
+
  private:
   // Value of F - iso along the ray and its derivative d/dt, from the active elements only.
   double eval(const Vector3d& x, const Vector3d& d, const int* act, int n, double* slope) const {

@@ -162,8 +162,8 @@ TEST_F(Demo, InfoDescribesTheGridAndTheMesh) {
 }
 
 TEST(Cli, EverySubcommandHasHelp) {
-  for (const char* sub :
-       {"sim", "info", "export", "clean", "grid-mesh", "render", "curvature", "demo"}) {
+  for (const char* sub : {"sim", "info", "export", "clean", "grid-mesh", "render", "curvature",
+                          "fans", "check", "particles", "demo"}) {
     const RunResult r = run(std::string(sub) + " --help");
     EXPECT_EQ(r.exit_code, 0) << sub;
     EXPECT_NE(r.output.find("Usage"), std::string::npos) << sub;
@@ -213,6 +213,53 @@ TEST(Cli, SameSceneAndSeedGiveByteIdenticalGridFiles) {
   EXPECT_EQ(bytes("a.smg"), bytes("b.smg"));
   EXPECT_NE(bytes("a.smg"), bytes("c.smg"));
   EXPECT_GT(bytes("a.smg").size(), 128u * 96u * 12u);
+}
+
+TEST(Cli, FansMeshAnXyzCloudAndCheckFindsItClosedAndManifold) {
+  const fs::path dir = scratch_dir("fans");
+  {
+    // 3000 points on a sphere of radius 50 (Fibonacci spiral: deterministic, even spacing).
+    std::ofstream xyz(dir / "sphere.xyz");
+    for (int k = 0; k < 3000; ++k) {
+      const double z = -1.0 + 2.0 * (k + 0.5) / 3000.0, a = 2.399963229728653 * k;
+      xyz << 50 * std::sqrt(1 - z * z) * std::cos(a) << " "
+          << 50 * std::sqrt(1 - z * z) * std::sin(a) << " " << 50 * z << "\n";
+    }
+  }
+  const std::string mesh = (dir / "m.ply").string();
+  RunResult r = run("fans " + (dir / "sphere.xyz").string() + " --out " + mesh + " --render " +
+                    (dir / "r.png").string() + " --histogram " + (dir / "q.png").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* f : {"m.ply", "r.png", "q.png"}) EXPECT_TRUE(fs::exists(dir / f)) << f;
+  r = run("check " + mesh);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  // A mesh with an edge shared by three faces fails the check with its own exit code.
+  std::ofstream(dir / "bad.ply")
+      << "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\n"
+         "property float y\nproperty float z\nelement face 3\n"
+         "property list uchar int vertex_indices\nend_header\n"
+         "0 0 0\n1 0 0\n0 1 0\n0 -1 0\n0 0 1\n3 0 1 2\n3 1 0 3\n3 0 1 4\n";
+  r = run("check " + (dir / "bad.ply").string());
+  EXPECT_EQ(r.exit_code, 6) << r.output;
+  // Malformed input: a clear message naming the file, exit 4.
+  std::ofstream(dir / "broken.xyz") << "1 2 3\n4 five 6\n";
+  r = run("fans " + (dir / "broken.xyz").string() + " --out " + (dir / "x.ply").string());
+  EXPECT_EQ(r.exit_code, 4) << r.output;
+  EXPECT_NE(r.output.find("broken.xyz"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "x.ply"));
+}
+
+TEST(Cli, ParticlesMeshASphereSceneIntoAClosedMesh) {
+  const fs::path dir = scratch_dir("particles");
+  std::ofstream(dir / "ball.yaml") << "name: ball\nobjects:\n  - {type: sphere, center: [0, 0, 0], "
+                                      "radius: 20}\n";
+  const RunResult r = run("particles " + (dir / "ball.yaml").string() + " --edge 4 --out " +
+                          (dir / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* f : {"particles.ply", "particles.png", "particles.json"})
+    EXPECT_TRUE(fs::exists(dir / "out" / f)) << f;
+  const RunResult c = run("check " + (dir / "out" / "particles.ply").string());
+  EXPECT_EQ(c.exit_code, 0) << c.output;
 }
 
 TEST(Cli, SimThenExportThenGridMeshOnASmallScanner) {

@@ -114,3 +114,40 @@ TEST(Shapes, BoxSlabHitAndEdgeCurvature) {
   EXPECT_NEAR(g.k1, 1.0 / 5.0, 1e-12);
   EXPECT_NEAR(g.k2, 0.0, 1e-12);
 }
+
+namespace scanmesh::sim {
+namespace {
+
+TEST(Shapes, BoundsContainEverySurfacePointTheRaysFind) {
+  const Scene scene = builtin_head_scene();
+  std::vector<std::shared_ptr<const SceneObject>> objects = {
+      make_sphere({1, 2, 3}, 5),
+      make_ellipsoid({0, 0, 0}, {3, 4, 5}),
+      make_torus({0, 0, 1}, Eigen::Vector3d(1, 1, 0).normalized(), 6, 2),
+      make_box({2, 0, 0}, {1, 2, 3}),
+      make_cylinder({0, 0, 0}, Eigen::Vector3d(0, 1, 1).normalized(), 2, 5.0),
+      scene.objects.front()};
+  for (const auto& object : objects) {
+    const Eigen::AlignedBox3d box = object->bounds();
+    ASSERT_FALSE(box.isEmpty());
+    const Eigen::Vector3d centre = box.center();
+    const double reach = box.diagonal().norm() + 10.0;
+    int hits = 0;
+    for (int k = 0; k < 200; ++k) {
+      // Rays from far outside toward the box centre, from directions on a spiral.
+      const double z = -1.0 + 2.0 * (k + 0.5) / 200.0, a = 2.39996 * k;
+      const Eigen::Vector3d dir(std::sqrt(1 - z * z) * std::cos(a),
+                                std::sqrt(1 - z * z) * std::sin(a), z);
+      const auto t = object->intersect(centre + reach * dir, -dir, 0.0, 2 * reach);
+      if (!t) continue;
+      ++hits;
+      const Eigen::Vector3d p = centre + reach * dir - *t * dir;
+      EXPECT_TRUE(box.exteriorDistance(p) < 1e-6) << object->name;
+    }
+    EXPECT_GT(hits, 30) << object->name;  // a ring lets rays through its hole
+  }
+  EXPECT_TRUE(scene.bounds().contains(Eigen::Vector3d(0, 0, 150)));
+}
+
+}  // namespace
+}  // namespace scanmesh::sim

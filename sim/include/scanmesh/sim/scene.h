@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -52,6 +53,9 @@ class SceneObject {
   virtual std::optional<double> intersect(const Eigen::Vector3d& origin,
                                           const Eigen::Vector3d& unit_dir, double t_min,
                                           double t_max) const = 0;
+  //! A box containing the object's solid (huge extents for unbounded shapes such as an
+  //! infinite cylinder), so meshers and probes know where to look.
+  virtual Eigen::AlignedBox3d bounds() const = 0;
   std::string name;
 };
 
@@ -66,6 +70,8 @@ class Scene {
   std::optional<RayHit> intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& unit_dir,
                                   double t_min, double t_max) const;
   SurfaceGeometry geometry(const RayHit& hit) const;
+  //! Union of the objects' bounds (empty for an empty scene).
+  Eigen::AlignedBox3d bounds() const;
   //! Procedural skin-like colour with painted features at a surface point (deterministic).
   Rgb8 color_at(const Eigen::Vector3d& p) const;
   //! True if p lies in a "hair" zone (noisier, speckled measurement).

@@ -1,0 +1,69 @@
+// Point-cloud fans: triangulating an unorganised point cloud by building a triangle fan around
+// every point (seed 002: S. Preuss, "Von Punktwolken zu Dreiecksnetzen", 2002, §3.4-3.7).
+//
+// Pipeline (docs/fans.md has every decision taken where the seed leaves a gap):
+//   uniform cell grid (§3.4, cell edge l = sqrt(2(dx dy + dy dz + dx dz) k / n))
+//   -> 3-nearest-neighbour plane normals, PCA fallback (§3.4), oriented by propagation
+//   -> one fan per point (§3.6 steps 1-6): nearest-first candidate insertion, distance-preserving
+//      rotation into the tangent plane, checks 4a-4c (Satz 3.3.3 in-circle test), completeness
+//      angle alpha with radius growth up to d_max, spoke flips (7c, Satz 3.3.6)
+//   -> assembly aware of the fans already merged (4a, 7a radar sweep, 7b rim closing, step 9):
+//      no duplicate triangle, no edge with more than two faces, no overlapping triangles
+//   -> closing of the small holes left where neighbouring fans disagree.
+// The input points are the output vertices, in input order.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "scanmesh/core/mesh.h"
+
+namespace scanmesh {
+
+struct FanOptions {
+  int k = 8;                     //!< expected points per grid cell (cell size formula, seed [Gap])
+  double alpha_deg = 90.0;       //!< completeness angle: largest accepted gap between spokes
+  double dmax_factor = 4.5;      //!< d_max = dmax_factor x cell edge l
+  double max_edge = 0.0;         //!< absolute edge-length limit (input units); 0: off
+  double max_edge_factor = 0.0;  //!< limit = factor x local spacing (nearest-neighbour
+                                 //!< distance of the fan centre), like GP3's mu; 0: off
+  double max_normal_angle_deg = 0.0;  //!< reject neighbours whose normal deviates more; 0: off
+  int max_hole_edges = 12;   //!< close holes left by disagreeing fans up to this length; 0: off
+  bool pca_normals = false;  //!< PCA normals for every point instead of the 3-NN plane
+  std::uint64_t seed = 1;    //!< picks the start point of the normal orientation (determinism)
+  int threads = 0;           //!< OpenMP threads; 0: default. Output does not depend on it.
+
+  //! Throws InvalidInputError for impossible values.
+  void validate() const;
+};
+
+struct FanStats {
+  std::size_t points = 0;
+  double cell_edge = 0.0;              //!< l
+  std::size_t pca_fallbacks = 0;       //!< fans rebuilt with a PCA normal
+  std::size_t open_fans = 0;           //!< fans with a gap >= 180 deg at d_max (boundary)
+  std::size_t proposed_triangles = 0;  //!< distinct fan triangles before assembly
+  std::size_t rejected_triangles = 0;  //!< refused by the assembly checks (4a/7a/overlap)
+  std::size_t hole_triangles = 0;      //!< added by hole closing
+  std::size_t inserted_points = 0;     //!< unused points inserted by a 1-to-3 split
+  std::size_t unused_points = 0;       //!< points in no triangle at the end
+  double seconds_normals = 0, seconds_fans = 0, seconds_assembly = 0;
+};
+
+struct FanResult {
+  Mesh mesh;  //!< positions = input points; normals = the oriented estimated normals
+  FanStats stats;
+};
+
+//! Triangulates the cloud. Throws InvalidInputError for fewer than 3 points, non-finite
+//! coordinates or invalid options. Deterministic for any thread count.
+FanResult build_fans(const std::vector<Eigen::Vector3d>& points, const FanOptions& options = {});
+
+//! Normals as the fan stage estimates them (3-NN plane, PCA fallback, oriented by
+//! propagation over the k-NN graph); exposed so baselines can be given the same normals.
+std::vector<Eigen::Vector3d> estimate_fan_normals(const std::vector<Eigen::Vector3d>& points,
+                                                  const FanOptions& options = {});
+
+}  // namespace scanmesh

@@ -1,0 +1,59 @@
+// Mesh-correctness checker shared by all meshers: the failure modes of seed 002 §3.1 (duplicate
+// triangles, edges with more than two faces, overlapping/penetrating triangles, holes) plus
+// vertex manifoldness, completeness and triangle quality. docs/fans.md, "Checker".
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "scanmesh/core/mesh.h"
+#include "scanmesh/meshing/mesh_topology.h"
+
+namespace scanmesh {
+
+struct MeshCheckOptions {
+  bool self_intersections = true;  //!< the most expensive test; O(F) expected with a cell grid
+};
+
+struct MeshCheckReport {
+  std::size_t vertices = 0, faces = 0;
+  TopologyStats topology;                //!< edges, boundary loops and lengths, Euler, unreferenced
+  std::size_t duplicate_faces = 0;       //!< faces whose vertex set repeats an earlier face
+  std::size_t degenerate_faces = 0;      //!< repeated corner or zero area
+  std::size_t nonmanifold_vertices = 0;  //!< faces around the vertex form more than one fan
+  std::size_t self_intersections = 0;    //!< intersecting face pairs (touching along shared
+                                         //!< corners/edges is not counted)
+  bool self_intersections_checked = false;
+  // Quality: min angle per face, and q = 4 sqrt(3) A / (l1^2 + l2^2 + l3^2), 1 = equilateral.
+  double min_angle_deg = 0, mean_min_angle_deg = 0;
+  double min_quality = 0, mean_quality = 0;
+  double fraction_min_angle_ge_30 = 0;  //!< share of faces whose smallest angle is >= 30 deg
+  std::array<std::size_t, 12> min_angle_histogram{};  //!< bins of 5 deg over [0, 60]
+
+  //! No edge has more than two faces.
+  bool edge_manifold() const { return topology.nonmanifold_edges == 0; }
+  //! Edge- and vertex-manifold, no duplicate, degenerate or intersecting faces.
+  bool defect_free() const;
+  //! Multi-line human-readable report.
+  std::string to_text() const;
+};
+
+MeshCheckReport check_mesh(const Mesh& mesh, const MeshCheckOptions& options = {});
+
+//! Faces f and g (indices into P) intersect improperly: more than touching at shared corners or
+//! along a shared edge (the self-intersection predicate of check_mesh; double precision).
+bool triangles_intersect(const std::vector<Eigen::Vector3d>& P, const std::array<int, 3>& f,
+                         const std::array<int, 3>& g);
+
+//! q = 4 sqrt(3) A / (sum of squared edge lengths) of one triangle.
+double triangle_quality(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                        const Eigen::Vector3d& c);
+
+//! Bar chart of the min-angle histogram (PNG, written atomically).
+void write_quality_histogram_png(const std::filesystem::path& path, const MeshCheckReport& report,
+                                 const std::string& title = "min angle per triangle [deg]");
+
+}  // namespace scanmesh

@@ -1,0 +1,112 @@
+// Uniform 3D cell grid for radius and k-nearest-neighbour queries (seed 002 §3.4, the thesis's
+// `clusterspace`): flat cell arrays filled by a counting sort, O(n) to build.
+#pragma once
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+namespace scanmesh::fans_detail {
+
+class CellGrid {
+ public:
+  //! `cell_edge` is the seed's l; it is enlarged when the grid would have more than 8 cells per
+  //! point (degenerate, very flat bounding boxes), which keeps memory O(n).
+  CellGrid(const std::vector<Eigen::Vector3d>& points, double cell_edge) : points_(points) {
+    lo_ = points[0];
+    Eigen::Vector3d hi = points[0];
+    for (const auto& p : points) {
+      lo_ = lo_.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    cell_ = cell_edge;
+    const double limit = 8.0 * static_cast<double>(points.size()) + 64.0;
+    while (true) {
+      for (int a = 0; a < 3; ++a)
+        dims_[a] = static_cast<int>(std::floor((hi[a] - lo_[a]) / cell_)) + 1;
+      if (static_cast<double>(dims_[0]) * dims_[1] * dims_[2] <= limit) break;
+      cell_ *= 1.25;
+    }
+    const std::size_t cells = static_cast<std::size_t>(dims_[0]) * dims_[1] * dims_[2];
+    start_.assign(cells + 1, 0);
+    std::vector<std::size_t> cell_of(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const auto c = coord(points[i]);
+      cell_of[i] = flat(c[0], c[1], c[2]);
+      ++start_[cell_of[i] + 1];
+    }
+    for (std::size_t c = 0; c < cells; ++c) start_[c + 1] += start_[c];
+    order_.resize(points.size());
+    std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
+    for (std::size_t i = 0; i < points.size(); ++i)
+      order_[fill[cell_of[i]]++] = static_cast<int>(i);
+  }
+
+  double cell_edge() const { return cell_; }
+  //! Point indices sorted by cell: iterating in this order keeps neighbouring work together.
+  const std::vector<int>& order() const { return order_; }
+
+  //! Calls f(index, squared distance) for every point with |p - c| <= r.
+  template <class F>
+  void visit_ball(const Eigen::Vector3d& c, double r, F&& f) const {
+    const auto a = coord(c - Eigen::Vector3d::Constant(r));
+    const auto b = coord(c + Eigen::Vector3d::Constant(r));
+    const double r2 = r * r;
+    for (int z = a[2]; z <= b[2]; ++z)
+      for (int y = a[1]; y <= b[1]; ++y)
+        for (int x = a[0]; x <= b[0]; ++x) {
+          const std::size_t cell = flat(x, y, z);
+          for (std::size_t k = start_[cell]; k < start_[cell + 1]; ++k) {
+            const int i = order_[k];
+            const double d2 = (points_[i] - c).squaredNorm();
+            if (d2 <= r2) f(i, d2);
+          }
+        }
+  }
+
+  //! The K nearest other points of point i, nearest first, as (squared distance, index).
+  //! Ties are broken by index, so the result is deterministic.
+  void knn(int i, int K, std::vector<std::pair<double, int>>& out) const {
+    const Eigen::Vector3d& c = points_[i];
+    double r = 0.5 * cell_;
+    const std::size_t want = std::min<std::size_t>(K, points_.size() - 1);
+    while (true) {
+      out.clear();
+      visit_ball(c, r, [&](int j, double d2) {
+        if (j != i) out.emplace_back(d2, j);
+      });
+      if (out.size() >= want || r > 1e3 * cell_ * (dims_[0] + dims_[1] + dims_[2])) break;
+      r *= 2.0;
+    }
+    const std::size_t keep = std::min(want, out.size());
+    std::partial_sort(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(keep), out.end());
+    out.resize(keep);
+  }
+
+ private:
+  std::array<int, 3> coord(const Eigen::Vector3d& p) const {
+    std::array<int, 3> c{};
+    for (int a = 0; a < 3; ++a) {
+      const double v = std::floor((p[a] - lo_[a]) / cell_);
+      c[a] = static_cast<int>(std::clamp(v, 0.0, static_cast<double>(dims_[a] - 1)));
+    }
+    return c;
+  }
+  std::size_t flat(int x, int y, int z) const {
+    return (static_cast<std::size_t>(z) * dims_[1] + y) * dims_[0] + x;
+  }
+
+  const std::vector<Eigen::Vector3d>& points_;
+  Eigen::Vector3d lo_;
+  double cell_ = 1.0;
+  std::array<int, 3> dims_{1, 1, 1};
+  std::vector<std::uint32_t> start_;  // n < 2^31 (checked by build_fans)
+  std::vector<int> order_;
+};
+
+}  // namespace scanmesh::fans_detail

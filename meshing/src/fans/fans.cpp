@@ -1,0 +1,849 @@
+// Point-cloud fans, seed 002 (Preuss 2002) §3.4-3.7. Decisions on the seed's gaps are marked
+// "Gap" and explained in docs/fans.md.
+#include "scanmesh/meshing/fans/fans.h"
+
+#include <omp.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <string>
+
+#include "cell_grid.h"
+#include "scanmesh/core/errors.h"
+#include "scanmesh/meshing/mesh_check.h"
+
+namespace scanmesh {
+
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+using fans_detail::CellGrid;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kTwoPi = 2.0 * kPi;
+constexpr int kNormalNeighbours = 10;    // PCA fallback and orientation graph
+constexpr double kAngleEps = 1e-9;       // step 4b angular epsilon (rad)
+constexpr double kCosEps = 1e-12;        // in-circle / flip tie tolerance on cosine sums
+constexpr double kOpenGap = kPi - 1e-6;  // a gap at least this wide is open: no triangle
+
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+double wrap_angle(double a) {
+  while (a < 0) a += kTwoPi;
+  while (a >= kTwoPi) a -= kTwoPi;
+  return a;
+}
+
+double cross2(const Vector2d& a, const Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
+double orient2(const Vector2d& a, const Vector2d& b, const Vector2d& c) {
+  return cross2(b - a, c - a);
+}
+double cos_angle(const Vector2d& u, const Vector2d& v) {
+  const double d = u.norm() * v.norm();
+  return d > 0 ? u.dot(v) / d : 1.0;
+}
+
+// Strictly inside or on the boundary of triangle (a, b, c), either orientation.
+bool in_triangle(const Vector2d& p, const Vector2d& a, const Vector2d& b, const Vector2d& c) {
+  const double d1 = orient2(a, b, p), d2 = orient2(b, c, p), d3 = orient2(c, a, p);
+  const bool neg = d1 < 0 || d2 < 0 || d3<0, pos = d1> 0 || d2 > 0 || d3 > 0;
+  return !(neg && pos);
+}
+
+struct Frame {
+  Vector3d b1, b2, n;
+  explicit Frame(const Vector3d& normal) : n(normal) {
+    // Gap (seed §3.7 step 2): b1 from the coordinate axis least aligned with n.
+    Vector3d e = Vector3d::UnitX();
+    const Vector3d a = n.cwiseAbs();
+    if (a.y() <= a.x() && a.y() <= a.z()) e = Vector3d::UnitY();
+    if (a.z() <= a.x() && a.z() <= a.y()) e = Vector3d::UnitZ();
+    b1 = n.cross(e).normalized();
+    b2 = n.cross(b1);
+  }
+  // Distance-preserving rotation into the tangent plane (seed §3.7 step 2: p' = p''|v|/|p''|).
+  bool rotate(const Vector3d& v, double eps_len, Vector2d& q) const {
+    q = Vector2d(b1.dot(v), b2.dot(v));
+    const double len = q.norm();
+    if (len < eps_len) return false;  // step 4b: the image falls on c
+    q *= v.norm() / len;
+    return true;
+  }
+  Vector2d project(const Vector3d& v) const { return {b1.dot(v), b2.dot(v)}; }
+};
+
+Vector3d pca_normal(const std::vector<Vector3d>& pts, int c,
+                    const std::vector<std::pair<double, int>>& nn) {
+  Vector3d mean = pts[c];
+  for (const auto& [d2, j] : nn) mean += pts[j];
+  mean /= static_cast<double>(nn.size() + 1);
+  Eigen::Matrix3d cov = (pts[c] - mean) * (pts[c] - mean).transpose();
+  for (const auto& [d2, j] : nn) cov += (pts[j] - mean) * (pts[j] - mean).transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
+  es.computeDirect(cov);
+  return es.eigenvectors().col(0).normalized();
+}
+
+struct Context {
+  const std::vector<Vector3d>& pts;
+  const FanOptions& opt;
+  CellGrid grid;
+  double eps_len = 0;
+  double d_max = 0;
+  std::vector<Vector3d> normals;
+  std::vector<Vector3d> pca;  // PCA normal of every point (orientation reference)
+  std::vector<std::uint8_t> is_pca;
+  std::vector<int> knn;  // kNormalNeighbours per point, -1 padded
+  std::vector<double> spacing;
+  Context(const std::vector<Vector3d>& p, const FanOptions& o, double l)
+      : pts(p), opt(o), grid(p, l) {}
+};
+
+double cell_edge_formula(const std::vector<Vector3d>& pts, int k) {
+  Vector3d lo = pts[0], hi = pts[0];
+  for (const auto& p : pts) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  const Vector3d d = hi - lo;
+  const double area = 2.0 * (d.x() * d.y() + d.y() * d.z() + d.x() * d.z());
+  double l = std::sqrt(area * k / static_cast<double>(pts.size()));
+  // A cloud on a line has no bounding-box area; fall back to the 1D spacing.
+  if (!(l > 0)) l = d.maxCoeff() * k / static_cast<double>(pts.size());
+  if (!(l > 0)) throw InvalidInputError("build_fans: all points coincide");
+  return l;
+}
+
+int omp_threads(const FanOptions& o) { return o.threads > 0 ? o.threads : omp_get_max_threads(); }
+
+// §3.4: plane through the 3 nearest neighbours; PCA of 10 neighbours when those 3 are
+// (near-)collinear. Then orientation by propagation over the k-NN graph (§3.4, [John '99] 2.6).
+void compute_normals(Context& ctx) {
+  const auto& pts = ctx.pts;
+  const int n = static_cast<int>(pts.size());
+  ctx.normals.assign(n, Vector3d::UnitZ());
+  ctx.pca.assign(n, Vector3d::UnitZ());
+  ctx.is_pca.assign(n, 0);
+  ctx.knn.assign(static_cast<std::size_t>(n) * kNormalNeighbours, -1);
+  ctx.spacing.assign(n, 0.0);
+#pragma omp parallel num_threads(omp_threads(ctx.opt))
+  {
+    std::vector<std::pair<double, int>> nn;
+#pragma omp for schedule(dynamic, 512)
+    for (int o = 0; o < n; ++o) {
+      const int c = ctx.grid.order()[o];  // cell order: neighbours are in cache
+      ctx.grid.knn(c, kNormalNeighbours, nn);
+      for (std::size_t k = 0; k < nn.size(); ++k) ctx.knn[c * kNormalNeighbours + k] = nn[k].second;
+      ctx.spacing[c] = nn.empty() ? 0.0 : std::sqrt(nn[0].first);
+      const Vector3d pca = nn.size() >= 2 ? pca_normal(pts, c, nn) : Vector3d::UnitZ();
+      ctx.pca[c] = pca;
+      bool use_pca = ctx.opt.pca_normals || nn.size() < 3;
+      if (!use_pca) {
+        const Vector3d& q1 = pts[nn[0].second];
+        const Vector3d& q2 = pts[nn[1].second];
+        const Vector3d& q3 = pts[nn[2].second];
+        const Vector3d cr = (q2 - q1).cross(q3 - q1);
+        const double longest =
+            std::max({(q2 - q1).squaredNorm(), (q3 - q1).squaredNorm(), (q3 - q2).squaredNorm()});
+        // Gap (§3.4 fallback trigger): |cross| / longest^2 < 0.2 means an angle below ~12 deg.
+        // Gap: also when the 3-NN plane deviates more than 30 deg from the PCA plane of the
+        // 10 nearest neighbours (noise larger than the 3-NN triangle can average out).
+        if (cr.norm() < 0.2 * longest || !(longest > 0) ||
+            std::abs(cr.normalized().dot(pca)) < std::cos(30.0 * kPi / 180.0))
+          use_pca = true;
+        else
+          ctx.normals[c] = cr.normalized();
+      }
+      if (use_pca && nn.size() >= 2) {
+        ctx.normals[c] = pca;
+        ctx.is_pca[c] = 1;
+      }
+    }
+  }
+  // Orientation: breadth-first propagation, flipping a neighbour whose normal points against
+  // the current one. The start point (chosen by the seed) points away from the centroid.
+  Vector3d centroid = Vector3d::Zero();
+  for (const auto& p : pts) centroid += p;
+  centroid /= n;
+  std::vector<std::uint8_t> done(n, 0);
+  std::deque<int> queue;
+  // Propagation runs on the PCA normals (smoother than 3-NN planes); each fan normal is then
+  // turned to agree with its point's oriented PCA normal.
+  auto& ref = ctx.pca;
+  auto start = [&](int s) {
+    if ((pts[s] - centroid).dot(ref[s]) < 0) ref[s] = -ref[s];
+    done[s] = 1;
+    queue.push_back(s);
+    while (!queue.empty()) {
+      const int c = queue.front();
+      queue.pop_front();
+      for (int k = 0; k < kNormalNeighbours; ++k) {
+        const int j = ctx.knn[c * kNormalNeighbours + k];
+        if (j < 0 || done[j]) continue;
+        if (ref[j].dot(ref[c]) < 0) ref[j] = -ref[j];
+        done[j] = 1;
+        queue.push_back(j);
+      }
+    }
+  };
+  start(static_cast<int>(ctx.opt.seed % static_cast<std::uint64_t>(n)));
+  for (int s = 0; s < n; ++s)
+    if (!done[s]) start(s);
+  for (int c = 0; c < n; ++c)
+    if (ctx.normals[c].dot(ref[c]) < 0) ctx.normals[c] = -ctx.normals[c];
+}
+
+struct Spoke {
+  int id;
+  double ang;
+  Vector2d q;
+};
+
+struct FanEntry {
+  int id;
+  bool closed_after;  // a triangle (c, this, next) exists in the fan
+};
+
+double edge_limit(const Context& ctx, int c) {
+  double lim = std::numeric_limits<double>::infinity();
+  if (ctx.opt.max_edge > 0) lim = ctx.opt.max_edge;
+  if (ctx.opt.max_edge_factor > 0) lim = std::min(lim, ctx.opt.max_edge_factor * ctx.spacing[c]);
+  return lim;
+}
+
+// Steps 1-6 and 7c for one centre c with the given normal; returns the fan in CCW order.
+class FanBuilder {
+ public:
+  explicit FanBuilder(const Context& ctx) : ctx_(ctx) {}
+
+  // Returns false when the fan stays open (a gap >= 180 deg) at d_max.
+  bool build(int c, const Vector3d& normal, std::vector<FanEntry>& out) {
+    const auto& pts = ctx_.pts;
+    const Frame frame(normal);
+    fan_.clear();
+    const double limit = edge_limit(ctx_, c);
+    const double cos_normal = ctx_.opt.max_normal_angle_deg > 0
+                                  ? std::cos(ctx_.opt.max_normal_angle_deg * kPi / 180.0)
+                                  : -2.0;
+    const double alpha = ctx_.opt.alpha_deg * kPi / 180.0;
+    // Gap (d_start, §3.7 step 1): the distance of the 10th nearest neighbour; the fans of the
+    // other points are merged later, so there are no pre-existing rim points to include.
+    int last = -1;
+    for (int k = kNormalNeighbours - 1; k >= 0 && last < 0; --k)
+      last = ctx_.knn[c * kNormalNeighbours + k];
+    double d_prev = -1.0;
+    double d = last >= 0 ? (pts[last] - pts[c]).norm() * (1 + 1e-9) : ctx_.grid.cell_edge();
+    d = std::min(d, ctx_.d_max);
+    const int* first = &ctx_.knn[static_cast<std::size_t>(c) * kNormalNeighbours];
+    const double r1_2 = d * d;
+    int round = 0;
+    while (true) {
+      cand_.clear();
+      if (round == 0) {
+        // The stored nearest neighbours are the ball of radius d, except points tied with the
+        // 10th neighbour, which the second round picks up.
+        for (int k = 0; k < kNormalNeighbours; ++k) {
+          if (first[k] < 0) continue;
+          const double d2 = (pts[first[k]] - pts[c]).squaredNorm();
+          if (d2 <= r1_2) cand_.emplace_back(d2, first[k]);
+        }
+      } else {
+        const double dp2 = d_prev * d_prev;
+        ctx_.grid.visit_ball(pts[c], d, [&](int j, double d2) {
+          if (j == c) return;
+          if (d2 > dp2 ||
+              (round == 1 && d2 <= r1_2 &&
+               std::find(first, first + kNormalNeighbours, j) == first + kNormalNeighbours))
+            cand_.emplace_back(d2, j);
+        });
+      }
+      ++round;
+      std::sort(cand_.begin(), cand_.end());  // step 1: nearest first, ties by index
+      for (const auto& [d2, j] : cand_) {
+        if (std::sqrt(d2) > limit) break;
+        if (ctx_.normals[j].dot(normal) < cos_normal) continue;
+        insert_candidate(j, pts[j] - pts[c], frame);
+      }
+      // Step 6: completeness. Gap (radius growth): grow only as far as a candidate could still
+      // split a gap wider than alpha: a point inside the circumcircle of (c, a, b) is closer to
+      // c than the circle's diameter |ab| / sin(gamma); open sectors (>= 180 deg) need d_max.
+      double needed = 0.0;
+      const std::size_t m = fan_.size();
+      if (m < 3) needed = ctx_.d_max;
+      for (std::size_t i = 0; i < m && m >= 3; ++i) {
+        const Spoke& a = fan_[i];
+        const Spoke& b = fan_[(i + 1) % m];
+        const double gap = wrap_angle(b.ang - a.ang);
+        if (gap <= alpha + 1e-9) continue;
+        if (gap >= kPi) {
+          needed = ctx_.d_max;
+          break;
+        }
+        needed = std::max(needed, (a.q - b.q).norm() / std::sin(gap));
+      }
+      needed = std::min(needed, limit);
+      if (needed <= d || d >= ctx_.d_max) break;
+      d_prev = d;
+      // at most doubling per round: an open sector is usually closed by the next ring
+      d = std::min({ctx_.d_max, 2.0 * d, std::max(needed, 1.25 * d)});
+    }
+    flip_spokes();
+    out.clear();
+    bool open = fan_.size() < 3;
+    const std::size_t m = fan_.size();
+    for (std::size_t i = 0; i < m; ++i) {
+      const Spoke& a = fan_[i];
+      const Spoke& b = fan_[(i + 1) % m];
+      const double gap = m < 2 ? kTwoPi : wrap_angle(b.ang - a.ang);
+      bool closed = gap < kOpenGap && m >= 2;
+      if (gap >= kPi) open = true;
+      if (closed && (pts[a.id] - pts[b.id]).norm() > limit) closed = false;
+      out.push_back({a.id, closed});
+    }
+    return !open;
+  }
+
+ private:
+  // Steps 2-4: map, locate, check 4a-4c, insert.
+  void insert_candidate(int id, const Vector3d& v, const Frame& frame) {
+    Vector2d q;
+    if (!frame.rotate(v, ctx_.eps_len, q)) return;  // 4b: image on c
+    for (const auto& s : fan_)
+      if (s.id == id) return;  // 4a
+    const double ang = wrap_angle(std::atan2(q.y(), q.x()));
+    const std::size_t m = fan_.size();
+    std::size_t pos = 0;  // step 3: first spoke with a larger angle
+    while (pos < m && fan_[pos].ang <= ang) ++pos;
+    if (m >= 2) {
+      const Spoke& a = fan_[(pos + m - 1) % m];
+      const Spoke& b = fan_[pos % m];
+      const double gamma = wrap_angle(b.ang - a.ang);
+      const bool inside_tri = gamma < kPi && in_triangle(q, Vector2d::Zero(), a.q, b.q);
+      // 4b: an angle too close to a neighbouring spoke is ambiguous, unless the point lies in
+      // the triangle (c, a, b) (then it must be taken, seed §3.7 step 4b).
+      if ((wrap_angle(ang - a.ang) < kAngleEps || wrap_angle(b.ang - ang) < kAngleEps) &&
+          !inside_tri)
+        return;
+      // 4c (Satz 3.3.3). Gap: an open sector (>= 180 deg) accepts unconditionally.
+      if (gamma < kPi && !inside_tri) {
+        const double cos_psi = cos_angle(a.q - q, b.q - q);
+        const double cos_gamma = cos_angle(a.q, b.q);
+        // Gap: on the circle counts as outside (reject); co-circular grids stay 4-connected.
+        if (!(cos_psi + cos_gamma < -kCosEps)) return;
+      }
+    }
+    fan_.insert(fan_.begin() + static_cast<std::ptrdiff_t>(pos), Spoke{id, ang, q});
+  }
+
+  // Step 7c (Satz 3.3.6): remove spoke c-r when the two angles facing it sum to more than
+  // 180 deg (the quadrilateral (c, a, r, b) is then split by a-b). Gap: passes are repeated
+  // until no spoke flips (the seed makes one pass).
+  void flip_spokes() {
+    bool changed = true;
+    while (changed && fan_.size() > 3) {
+      changed = false;
+      const std::size_t m = fan_.size();
+      for (std::size_t j = 0; j < m; ++j) {
+        const Spoke& a = fan_[(j + m - 1) % m];
+        const Spoke& r = fan_[j];
+        const Spoke& b = fan_[(j + 1) % m];
+        const double g1 = wrap_angle(r.ang - a.ang), g2 = wrap_angle(b.ang - r.ang);
+        if (g1 >= kPi || g2 >= kPi || g1 + g2 >= kPi) continue;
+        const double cos_a1 = cos_angle(-a.q, r.q - a.q);
+        const double cos_a2 = cos_angle(r.q - b.q, -b.q);
+        if (cos_a1 + cos_a2 < -kCosEps) {
+          fan_.erase(fan_.begin() + static_cast<std::ptrdiff_t>(j));
+          changed = true;
+          break;
+        }
+      }
+    }
+  }
+
+  const Context& ctx_;
+  std::vector<Spoke> fan_;
+  std::vector<std::pair<double, int>> cand_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Assembly (steps 7a, 7b, 9): the fans are merged in a deterministic order into one mesh; a
+// triangle is accepted only if it is new (4a), keeps every directed edge unique (so no edge gets
+// a third face and orientation stays consistent, 7b) and does not overlap a triangle around its
+// corners (the radar sweep's visibility condition, 7a, checked per triangle).
+class Assembly {
+ public:
+  Assembly(const std::vector<Vector3d>& pts, double eps_area)
+      : pts_(pts), star_(pts.size()), eps_area_(eps_area) {}
+
+  const std::vector<std::array<int, 3>>& faces() const { return faces_; }
+  const std::vector<std::uint8_t>& alive() const { return alive_; }
+  const std::vector<std::vector<int>>& star() const { return star_; }
+
+  bool directed_edge_used(int u, int v) const {
+    for (int f : star_[u]) {
+      const auto& t = faces_[f];
+      for (int k = 0; k < 3; ++k)
+        if (t[k] == u && t[(k + 1) % 3] == v) return true;
+    }
+    return false;
+  }
+  bool edge_exists(int u, int v) const {
+    return directed_edge_used(u, v) || directed_edge_used(v, u);
+  }
+
+  // Checks and adds triangle (a, b, c), counter-clockwise seen from outside. `in_3d`: the
+  // overlap test is a 3D intersection test against the corners' faces instead of the planar
+  // one (hole closing: on a noisy surface, projected neighbours overlap without intersecting).
+  bool try_add(const std::array<int, 3>& t, bool in_3d = false) {
+    const Vector3d& A = pts_[t[0]];
+    const Vector3d& B = pts_[t[1]];
+    const Vector3d& C = pts_[t[2]];
+    const Vector3d nrm = (B - A).cross(C - A);
+    const double longest =
+        std::max({(B - A).squaredNorm(), (C - B).squaredNorm(), (A - C).squaredNorm()});
+    if (!(nrm.norm() > eps_area_ * longest)) return false;  // degenerate
+    // 4a / step 9: duplicate (in either orientation).
+    for (int f : star_[t[0]]) {
+      auto s = faces_[f];
+      auto u = t;
+      std::sort(s.begin(), s.end());
+      std::sort(u.begin(), u.end());
+      if (s == u) return false;
+    }
+    for (int k = 0; k < 3; ++k)
+      if (directed_edge_used(t[k], t[(k + 1) % 3])) return false;
+    if (in_3d ? intersects_star(t) : overlaps_star(t, nrm.normalized())) return false;
+    add(t);
+    return true;
+  }
+
+  void add(const std::array<int, 3>& t) {
+    const int f = static_cast<int>(faces_.size());
+    faces_.push_back(t);
+    alive_.push_back(1);
+    for (int v : t) star_[v].push_back(f);
+  }
+  void remove(int f) {
+    alive_[f] = 0;
+    for (int v : faces_[f]) std::erase(star_[v], f);
+  }
+
+  bool intersects_star(const std::array<int, 3>& t) const {
+    for (int v : t)
+      for (int f : star_[v])
+        if (triangles_intersect(pts_, t, faces_[f])) return true;
+    return false;
+  }
+
+  // 7a: no triangle sharing a corner may overlap the new one in the new triangle's plane.
+  // Separating-axis test with touching allowed (shared corners and edges lie on the axis).
+  bool overlaps_star(const std::array<int, 3>& t, const Vector3d& n) const {
+    const Frame fr(n);
+    const Vector3d& o = pts_[t[0]];
+    std::array<Vector2d, 3> a;
+    for (int k = 0; k < 3; ++k) a[k] = fr.project(pts_[t[k]] - o);
+    double scale = 0;
+    for (int k = 0; k < 3; ++k) scale = std::max(scale, (a[k] - a[(k + 1) % 3]).squaredNorm());
+    const double tol = 1e-9 * std::sqrt(scale);  // x edge length = an area tolerance
+    for (int v : t)
+      for (int f : star_[v]) {
+        std::array<Vector2d, 3> b;
+        const auto& s = faces_[f];
+        for (int k = 0; k < 3; ++k) b[k] = fr.project(pts_[s[k]] - o);
+        if (overlap2d(a, b, tol)) return true;
+      }
+    return false;
+  }
+
+  static bool separates(const std::array<Vector2d, 3>& p, const std::array<Vector2d, 3>& q,
+                        double tol) {
+    const double orient = orient2(p[0], p[1], p[2]);
+    if (orient == 0) return false;
+    const double s = orient > 0 ? 1.0 : -1.0;
+    for (int k = 0; k < 3; ++k) {
+      const Vector2d& e0 = p[k];
+      const Vector2d& e1 = p[(k + 1) % 3];
+      const double len = (e1 - e0).norm();
+      bool all_out = true;
+      for (int i = 0; i < 3 && all_out; ++i)
+        if (s * orient2(e0, e1, q[i]) > tol * len) all_out = false;
+      if (all_out) return true;
+    }
+    return false;
+  }
+  static bool overlap2d(const std::array<Vector2d, 3>& a, const std::array<Vector2d, 3>& b,
+                        double tol) {
+    return !separates(a, b, tol) && !separates(b, a, tol);
+  }
+
+ private:
+  const std::vector<Vector3d>& pts_;
+  std::vector<std::array<int, 3>> faces_;
+  std::vector<std::uint8_t> alive_;
+  std::vector<std::vector<int>> star_;
+  double eps_area_;
+};
+
+// Closes the small holes where neighbouring fans disagreed: boundary loops of at most
+// `max_edges` edges, by ear clipping in the loop's mean plane, best (largest smallest angle)
+// ear first, through the same checks as the assembly.
+std::size_t close_holes(Assembly& as, const std::vector<Vector3d>& pts,
+                        const std::vector<Vector3d>& normals, int max_edges) {
+  const auto& faces = as.faces();
+  // read-only scan in parallel (flags per face side), collected in face order
+  std::vector<std::uint8_t> open_side(faces.size(), 0);
+  const auto nf = static_cast<std::ptrdiff_t>(faces.size());
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t f = 0; f < nf; ++f) {
+    if (!as.alive()[f]) continue;
+    for (int k = 0; k < 3; ++k)
+      if (!as.directed_edge_used(faces[f][(k + 1) % 3], faces[f][k])) open_side[f] |= 1 << k;
+  }
+  std::vector<std::pair<int, int>> boundary;
+  for (std::size_t f = 0; f < faces.size(); ++f)
+    for (int k = 0; k < 3; ++k)
+      if (open_side[f] & (1 << k)) boundary.emplace_back(faces[f][k], faces[f][(k + 1) % 3]);
+  std::sort(boundary.begin(), boundary.end());
+  std::vector<std::uint8_t> used(boundary.size(), 0);
+  auto first_out = [&](int u) {
+    return static_cast<std::size_t>(
+        std::lower_bound(boundary.begin(), boundary.end(),
+                         std::pair<int, int>{u, std::numeric_limits<int>::min()}) -
+        boundary.begin());
+  };
+  // Where several boundary loops touch at a vertex (a non-manifold vertex: separate wedges of
+  // faces), a loop continues with the outgoing boundary half-edge that follows the incoming one
+  // counter-clockwise around the vertex normal: the free sector between the two wedges.
+  auto next_half_edge = [&](std::size_t h, std::size_t h0) -> std::ptrdiff_t {
+    const int w = boundary[h].first, u = boundary[h].second;
+    std::size_t b = first_out(u);
+    std::ptrdiff_t best = -1;
+    double best_angle = 10.0;
+    const Frame fr(normals[u]);
+    const Vector2d dw = fr.project(pts[w] - pts[u]);
+    const double aw = std::atan2(dw.y(), dw.x());
+    for (; b < boundary.size() && boundary[b].first == u; ++b) {
+      if (used[b] && b != h0) continue;
+      const Vector2d dv = fr.project(pts[boundary[b].second] - pts[u]);
+      double a = std::atan2(dv.y(), dv.x()) - aw;
+      while (a <= 0) a += kTwoPi;
+      while (a > kTwoPi) a -= kTwoPi;
+      if (a < best_angle) {
+        best_angle = a;
+        best = static_cast<std::ptrdiff_t>(b);
+      }
+    }
+    return best;
+  };
+  std::size_t added = 0;
+  for (std::size_t h0 = 0; h0 < boundary.size(); ++h0) {
+    if (used[h0]) continue;
+    std::vector<int> loop;
+    std::size_t h = h0;
+    bool ok = true;
+    while (true) {
+      used[h] = 1;
+      loop.push_back(boundary[h].first);
+      if (static_cast<int>(loop.size()) > max_edges) {
+        ok = false;
+        break;
+      }
+      const std::ptrdiff_t nh = next_half_edge(h, h0);
+      if (nh < 0) {
+        ok = false;
+        break;
+      }
+      if (static_cast<std::size_t>(nh) == h0) break;
+      h = static_cast<std::size_t>(nh);
+    }
+    if (!ok || loop.size() < 3) continue;
+    // The fill faces traverse the loop backwards: ear at i is (loop[i+1], loop[i], loop[i-1]).
+    while (loop.size() >= 3) {
+      const std::size_t m = loop.size();
+      Vector3d newell = Vector3d::Zero();  // of the reversed loop = the fill orientation
+      for (std::size_t i = 0; i < m; ++i) {
+        const Vector3d& p = pts[loop[(i + 1) % m]];
+        const Vector3d& q = pts[loop[i]];
+        newell += p.cross(q);
+      }
+      std::vector<std::pair<double, std::size_t>> ears;  // (-smallest angle, position)
+      for (std::size_t i = 0; i < m; ++i) {
+        const int a = loop[(i + 1) % m], b = loop[i], c = loop[(i + m - 1) % m];
+        const Vector3d nrm = (pts[b] - pts[a]).cross(pts[c] - pts[a]);
+        if (nrm.dot(newell) <= 0) continue;  // reflex ear
+        if (m > 3 && as.edge_exists(a, c)) continue;
+        const Vector3d A = pts[a], B = pts[b], C = pts[c];
+        auto ang = [](const Vector3d& p, const Vector3d& x, const Vector3d& y) {
+          return std::acos(std::clamp((x - p).normalized().dot((y - p).normalized()), -1.0, 1.0));
+        };
+        // no other loop vertex inside the ear (in the ear's plane)
+        bool empty = true;
+        const Frame fr(nrm.normalized());
+        const Vector2d a2 = fr.project(A - A), b2 = fr.project(B - A), c2 = fr.project(C - A);
+        for (std::size_t j2 = 0; j2 < m && empty; ++j2) {
+          const int x = loop[j2];
+          if (x == a || x == b || x == c) continue;
+          if (in_triangle(fr.project(pts[x] - A), a2, b2, c2)) empty = false;
+        }
+        if (empty) ears.emplace_back(-std::min({ang(A, B, C), ang(B, C, A), ang(C, A, B)}), i);
+      }
+      std::sort(ears.begin(), ears.end());
+      bool clipped = false;
+      for (const auto& [q, i] : ears) {
+        const std::array<int, 3> t{loop[(i + 1) % m], loop[i], loop[(i + m - 1) % m]};
+        if (!as.try_add(t, true)) continue;
+        ++added;
+        loop.erase(loop.begin() + static_cast<std::ptrdiff_t>(i));
+        clipped = true;
+        break;
+      }
+      if (!clipped) break;
+      if (loop.size() == 2) break;
+    }
+  }
+  return added;
+}
+
+// A point that ended in no triangle lies on a triangle of its neighbourhood: split that
+// triangle 1-to-3 through the point (keeps the mesh manifold and every point used).
+std::size_t insert_unused(Assembly& as, const Context& ctx) {
+  const auto& pts = ctx.pts;
+  std::size_t inserted = 0;
+  for (std::size_t p = 0; p < pts.size(); ++p) {
+    if (!as.star()[p].empty()) continue;
+    int best = -1;
+    double best_dist = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < kNormalNeighbours; ++k) {
+      const int j = ctx.knn[p * kNormalNeighbours + k];
+      if (j < 0) continue;
+      for (int f : as.star()[j]) {
+        const auto& t = as.faces()[f];
+        const Vector3d nrm = (pts[t[1]] - pts[t[0]]).cross(pts[t[2]] - pts[t[0]]).normalized();
+        const Frame fr(nrm);
+        const Vector2d x = fr.project(pts[p] - pts[t[0]]);
+        const Vector2d a = Vector2d::Zero(), b = fr.project(pts[t[1]] - pts[t[0]]),
+                       c = fr.project(pts[t[2]] - pts[t[0]]);
+        if (!(orient2(a, b, x) > 0 && orient2(b, c, x) > 0 && orient2(c, a, x) > 0)) continue;
+        const double dist = std::abs(nrm.dot(pts[p] - pts[t[0]]));
+        if (dist < best_dist) {
+          best_dist = dist;
+          best = f;
+        }
+      }
+    }
+    if (best < 0) continue;
+    const auto t = as.faces()[best];
+    as.remove(best);
+    const int q = static_cast<int>(p);
+    as.add({t[0], t[1], q});
+    as.add({t[1], t[2], q});
+    as.add({t[2], t[0], q});
+    ++inserted;
+  }
+  return inserted;
+}
+
+void check_input(const std::vector<Vector3d>& points, const FanOptions& options) {
+  options.validate();
+  if (points.size() < 3) throw InvalidInputError("build_fans: needs at least 3 points");
+  if (points.size() > static_cast<std::size_t>(std::numeric_limits<int>::max() / 16))
+    throw InvalidInputError("build_fans: too many points");
+  for (const auto& p : points)
+    if (!p.allFinite()) throw InvalidInputError("build_fans: a point has a non-finite coordinate");
+}
+
+// Points reordered by grid cell, so that neighbours are close in memory (the fans touch the
+// positions and normals of all neighbours; in input order that is a cache miss each).
+std::vector<int> cell_order(const std::vector<Vector3d>& points, int k) {
+  const CellGrid g(points, cell_edge_formula(points, k));
+  return g.order();
+}
+
+}  // namespace
+
+void FanOptions::validate() const {
+  auto fail = [](const std::string& what) { throw InvalidInputError("fan options: " + what); };
+  if (k < 1 || k > 1000) fail("k must be in 1..1000");
+  if (!(alpha_deg >= 30.0 && alpha_deg < 180.0)) fail("alpha_deg must be in [30, 180)");
+  if (!(dmax_factor > 0 && dmax_factor <= 100)) fail("dmax_factor must be in (0, 100]");
+  if (!(max_edge >= 0) || !std::isfinite(max_edge)) fail("max_edge must be >= 0");
+  if (!(max_edge_factor >= 0) || !std::isfinite(max_edge_factor))
+    fail("max_edge_factor must be >= 0");
+  if (!(max_normal_angle_deg >= 0 && max_normal_angle_deg <= 180))
+    fail("max_normal_angle_deg must be in [0, 180]");
+  if (max_hole_edges < 0) fail("max_hole_edges must be >= 0");
+  if (threads < 0) fail("threads must be >= 0");
+}
+
+std::vector<Vector3d> estimate_fan_normals(const std::vector<Vector3d>& input,
+                                           const FanOptions& options) {
+  check_input(input, options);
+  const std::vector<int> perm = cell_order(input, options.k);
+  std::vector<Vector3d> points(input.size());
+  for (std::size_t i = 0; i < perm.size(); ++i) points[i] = input[perm[i]];
+  Context ctx(points, options, cell_edge_formula(points, options.k));
+  compute_normals(ctx);
+  std::vector<Vector3d> out(input.size());
+  for (std::size_t i = 0; i < perm.size(); ++i) out[perm[i]] = ctx.normals[i];
+  return out;
+}
+
+FanResult build_fans(const std::vector<Vector3d>& input, const FanOptions& options) {
+  check_input(input, options);
+  // Internally the points are in cell order; indices are mapped back at the end.
+  const std::vector<int> perm = cell_order(input, options.k);
+  std::vector<Vector3d> points(input.size());
+  for (std::size_t i = 0; i < perm.size(); ++i) points[i] = input[perm[i]];
+  FanResult result;
+  FanStats& st = result.stats;
+  st.points = points.size();
+  const int n = static_cast<int>(points.size());
+  auto t0 = std::chrono::steady_clock::now();
+  Context ctx(points, options, cell_edge_formula(points, options.k));
+  st.cell_edge = ctx.grid.cell_edge();
+  Vector3d lo = points[0], hi = points[0];
+  for (const auto& p : points) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  ctx.eps_len = 1e-9 * (hi - lo).norm();  // Gap (4b): "falls on c"
+  ctx.d_max = options.dmax_factor * st.cell_edge;
+  compute_normals(ctx);
+  st.seconds_normals = seconds_since(t0);
+
+  // Steps 1-6, 7c: one fan per point, independent of the others, so they run in parallel and
+  // the result does not depend on the thread count.
+  t0 = std::chrono::steady_clock::now();
+  std::vector<std::vector<FanEntry>> fans(n);
+  std::size_t fallbacks = 0, open = 0;
+#pragma omp parallel num_threads(omp_threads(options)) reduction(+ : fallbacks, open)
+  {
+    FanBuilder builder(ctx);
+#pragma omp for schedule(dynamic, 256)
+    for (int o = 0; o < n; ++o) {
+      const int c = ctx.grid.order()[o];
+      bool closed = builder.build(c, ctx.normals[c], fans[c]);
+      if (!closed && !ctx.is_pca[c]) {
+        // Gap (§3.4 fallback trigger): a fan still open at d_max is rebuilt once with the
+        // PCA normal of the 10 nearest neighbours, oriented like the 3-NN normal.
+        Vector3d pn = ctx.pca[c];
+        if (pn.dot(ctx.normals[c]) < 0) pn = -pn;
+        if (std::abs(pn.dot(ctx.normals[c])) < 1.0 - 1e-12) {
+          ++fallbacks;
+          std::vector<FanEntry> alt;
+          if (builder.build(c, pn, alt)) {
+            fans[c] = std::move(alt);
+            closed = true;
+          }
+        }
+      }
+      if (!closed) ++open;
+    }
+  }
+  st.pca_fallbacks = fallbacks;
+  st.open_fans = open;
+  st.seconds_fans = seconds_since(t0);
+
+  // Step 9 with votes: triangle (c, r1, r2) is proposed by c and, if they agree, by r1 and r2.
+  // Each distinct triangle is emitted once, by its smallest-index proposer.
+  t0 = std::chrono::steady_clock::now();
+  auto has_pair = [&](int v, int x, int y) {  // fan(v) has x then y, closed between them
+    const auto& f = fans[v];
+    const std::size_t m = f.size();
+    for (std::size_t i = 0; i < m; ++i)
+      if (f[i].id == x) return f[i].closed_after && f[(i + 1) % m].id == y;
+    return false;
+  };
+  // Two passes (count, then fill at prefix offsets) keep the order independent of threads.
+  std::vector<std::array<int, 4>> proposals;  // a, b, c, votes
+  {
+    std::vector<std::size_t> offset(static_cast<std::size_t>(n) + 1, 0);
+    for (int pass = 0; pass < 2; ++pass) {
+#pragma omp parallel for num_threads(omp_threads(options)) schedule(dynamic, 512)
+      for (int c = 0; c < n; ++c) {
+        const auto& f = fans[c];
+        const std::size_t m = f.size();
+        std::size_t k = pass == 0 ? 0 : offset[c];
+        for (std::size_t i = 0; i < m; ++i) {
+          if (!f[i].closed_after) continue;
+          const int r1 = f[i].id, r2 = f[(i + 1) % m].id;
+          const bool v1 = has_pair(r1, r2, c), v2 = has_pair(r2, c, r1);
+          int smallest = c;
+          if (v1) smallest = std::min(smallest, r1);
+          if (v2) smallest = std::min(smallest, r2);
+          if (smallest != c) continue;
+          if (pass == 1) proposals[k] = {c, r1, r2, 1 + int(v1) + int(v2)};
+          ++k;
+        }
+        if (pass == 0) offset[c + 1] = k;
+      }
+      if (pass == 0) {
+        for (int c = 0; c < n; ++c) offset[c + 1] += offset[c];
+        proposals.resize(offset[n]);
+      }
+    }
+  }
+  st.proposed_triangles = proposals.size();
+  {  // stable bucket partition: 3 votes, then 2, then 1
+    std::vector<std::array<int, 4>> sorted;
+    sorted.reserve(proposals.size());
+    for (int votes = 3; votes >= 1; --votes)
+      for (const auto& p : proposals)
+        if (p[3] == votes) sorted.push_back(p);
+    proposals.swap(sorted);
+  }
+  Assembly as(points, 1e-9);
+  for (const auto& p : proposals) {
+    // A triangle all three fans agree on lies in disjoint angular sectors of each corner's fan,
+    // follows each corner's spokes in order (so its directed edges are unique) and is emitted
+    // once: among themselves these need no checks. Everything after them is checked.
+    if (p[3] == 3) {
+      as.add({p[0], p[1], p[2]});
+      continue;
+    }
+    if (!as.try_add({p[0], p[1], p[2]})) ++st.rejected_triangles;
+  }
+  fans.clear();
+  fans.shrink_to_fit();
+  if (options.max_hole_edges >= 3)
+    st.hole_triangles = close_holes(as, points, ctx.normals, options.max_hole_edges);
+  st.inserted_points = insert_unused(as, ctx);
+
+  Mesh& mesh = result.mesh;
+  mesh.positions = input;
+  for (std::size_t f = 0; f < as.faces().size(); ++f)
+    if (as.alive()[f]) {
+      const auto& t = as.faces()[f];
+      mesh.triangles.push_back({perm[t[0]], perm[t[1]], perm[t[2]]});
+    }
+  // Consistent output orientation: faces follow the oriented normals; turn everything round
+  // if that makes the enclosed volume negative (inward normals on a closed surface).
+  double volume = 0;
+  for (const auto& t : mesh.triangles) volume += input[t[0]].dot(input[t[1]].cross(input[t[2]]));
+  double area = 0;
+  for (const auto& t : mesh.triangles)
+    area += (input[t[1]] - input[t[0]]).cross(input[t[2]] - input[t[0]]).norm();
+  const bool flip = volume < -1e-3 * area * (hi - lo).norm();
+  if (flip)
+    for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
+  mesh.normals.resize(n);
+  for (int i = 0; i < n; ++i)
+    mesh.normals[perm[i]] = (flip ? -ctx.normals[i] : ctx.normals[i]).cast<float>();
+  std::vector<std::uint8_t> used(n, 0);
+  for (const auto& t : mesh.triangles)
+    for (int v : t) used[v] = 1;
+  st.unused_points = static_cast<std::size_t>(std::count(used.begin(), used.end(), 0));
+  st.seconds_assembly = seconds_since(t0);
+  return result;
+}
+
+}  // namespace scanmesh

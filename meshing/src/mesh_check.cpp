@@ -1,0 +1,312 @@
+#include "scanmesh/meshing/mesh_check.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <numeric>
+#include <sstream>
+#include <unordered_map>
+
+namespace scanmesh {
+
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+double orient3d(const Vector3d& a, const Vector3d& b, const Vector3d& c, const Vector3d& d) {
+  return (b - a).cross(c - a).dot(d - a);
+}
+double orient2d(const Vector2d& a, const Vector2d& b, const Vector2d& c) {
+  const Vector2d u = b - a, v = c - a;
+  return u.x() * v.y() - u.y() * v.x();
+}
+int sgn(double x) { return (x > 0) - (x < 0); }
+
+// Segment p-q crosses the interior of triangle (a, b, c) (non-coplanar case, strict).
+bool segment_crosses_triangle(const Vector3d& p, const Vector3d& q, const Vector3d& a,
+                              const Vector3d& b, const Vector3d& c) {
+  const int s1 = sgn(orient3d(a, b, c, p)), s2 = sgn(orient3d(a, b, c, q));
+  if (s1 == 0 || s2 == 0 || s1 == s2) return false;
+  const int o1 = sgn(orient3d(p, q, a, b)), o2 = sgn(orient3d(p, q, b, c)),
+            o3 = sgn(orient3d(p, q, c, a));
+  return o1 != 0 && o1 == o2 && o2 == o3;
+}
+
+// Interiors of two coplanar triangles overlap (separating axis; touching is not overlap).
+bool coplanar_overlap(const std::array<Vector3d, 3>& t, const std::array<Vector3d, 3>& u,
+                      const Vector3d& normal) {
+  int drop = 0;
+  normal.cwiseAbs().maxCoeff(&drop);
+  const int x = (drop + 1) % 3, y = (drop + 2) % 3;
+  std::array<Vector2d, 3> a, b;
+  for (int k = 0; k < 3; ++k) {
+    a[k] = {t[k][x], t[k][y]};
+    b[k] = {u[k][x], u[k][y]};
+  }
+  double scale = 0;
+  for (int k = 0; k < 3; ++k)
+    scale = std::max(
+        {scale, (a[k] - a[(k + 1) % 3]).squaredNorm(), (b[k] - b[(k + 1) % 3]).squaredNorm()});
+  const double tol = 1e-12 * scale;
+  auto separates = [tol](const std::array<Vector2d, 3>& p, const std::array<Vector2d, 3>& q) {
+    const double o = orient2d(p[0], p[1], p[2]);
+    if (o == 0) return true;  // degenerate: counted elsewhere
+    const double s = o > 0 ? 1.0 : -1.0;
+    for (int k = 0; k < 3; ++k) {
+      bool out = true;
+      for (int i = 0; i < 3 && out; ++i)
+        if (s * orient2d(p[k], p[(k + 1) % 3], q[i]) > tol) out = false;
+      if (out) return true;
+    }
+    return false;
+  };
+  return !separates(a, b) && !separates(b, a);
+}
+
+// Two faces intersect improperly. Faces sharing corners may touch there (and along a shared
+// edge); anything more is an intersection.
+}  // namespace
+
+bool triangles_intersect(const std::vector<Vector3d>& P, const std::array<int, 3>& f,
+                         const std::array<int, 3>& g) {
+  std::array<Vector3d, 3> a{P[f[0]], P[f[1]], P[f[2]]}, b{P[g[0]], P[g[1]], P[g[2]]};
+  int shared = 0;
+  std::array<int, 3> fi{-1, -1, -1};  // fi[k]: index in g of f[k], or -1
+  for (int k = 0; k < 3; ++k)
+    for (int j = 0; j < 3; ++j)
+      if (f[k] == g[j]) {
+        fi[k] = j;
+        ++shared;
+      }
+  if (shared == 3) return false;  // duplicate, counted separately
+  const Vector3d na = (a[1] - a[0]).cross(a[2] - a[0]);
+  const Vector3d nb = (b[1] - b[0]).cross(b[2] - b[0]);
+  double scale = 0;
+  for (int k = 0; k < 3; ++k)
+    scale = std::max({scale, (a[k] - a[(k + 1) % 3]).norm(), (b[k] - b[(k + 1) % 3]).norm()});
+  const double tol = 1e-12 * scale * scale * scale;
+  bool coplanar = true;
+  for (int k = 0; k < 3; ++k)
+    if (std::abs(orient3d(a[0], a[1], a[2], b[k])) > tol) coplanar = false;
+  if (coplanar) return coplanar_overlap(a, b, na.squaredNorm() > 0 ? na : nb);
+  if (shared == 2) return false;  // non-coplanar faces on a common edge meet only on it
+  if (shared == 1) {
+    int kf = 0;
+    while (fi[kf] < 0) ++kf;
+    const int kg = fi[kf];
+    const Vector3d& p1 = a[(kf + 1) % 3];
+    const Vector3d& q1 = a[(kf + 2) % 3];
+    const Vector3d& p2 = b[(kg + 1) % 3];
+    const Vector3d& q2 = b[(kg + 2) % 3];
+    return segment_crosses_triangle(p1, q1, b[0], b[1], b[2]) ||
+           segment_crosses_triangle(p2, q2, a[0], a[1], a[2]);
+  }
+  for (int k = 0; k < 3; ++k) {
+    if (segment_crosses_triangle(a[k], a[(k + 1) % 3], b[0], b[1], b[2])) return true;
+    if (segment_crosses_triangle(b[k], b[(k + 1) % 3], a[0], a[1], a[2])) return true;
+  }
+  return false;
+}
+
+namespace {
+
+std::size_t count_self_intersections(const Mesh& mesh) {
+  const auto& P = mesh.positions;
+  const auto& F = mesh.triangles;
+  if (F.size() < 2) return 0;
+  std::vector<Vector3d> lo(F.size()), hi(F.size());
+  Vector3d glo = P[F[0][0]], ghi = glo;
+  double mean = 0;
+  for (std::size_t i = 0; i < F.size(); ++i) {
+    lo[i] = P[F[i][0]].cwiseMin(P[F[i][1]]).cwiseMin(P[F[i][2]]);
+    hi[i] = P[F[i][0]].cwiseMax(P[F[i][1]]).cwiseMax(P[F[i][2]]);
+    glo = glo.cwiseMin(lo[i]);
+    ghi = ghi.cwiseMax(hi[i]);
+    mean += (hi[i] - lo[i]).maxCoeff();
+  }
+  mean /= static_cast<double>(F.size());
+  double cell = std::max(2.0 * mean, 1e-12 * (ghi - glo).norm());
+  std::array<long long, 3> dims{};
+  while (true) {
+    for (int a = 0; a < 3; ++a)
+      dims[a] = static_cast<long long>(std::floor((ghi[a] - glo[a]) / cell)) + 1;
+    if (static_cast<double>(dims[0]) * dims[1] * dims[2] <= 8.0 * F.size() + 64) break;
+    cell *= 1.5;
+  }
+  auto coord = [&](const Vector3d& p, int a) {
+    return std::clamp<long long>(static_cast<long long>(std::floor((p[a] - glo[a]) / cell)), 0,
+                                 dims[a] - 1);
+  };
+  std::unordered_map<long long, std::vector<int>> cells;
+  for (std::size_t i = 0; i < F.size(); ++i)
+    for (long long z = coord(lo[i], 2); z <= coord(hi[i], 2); ++z)
+      for (long long y = coord(lo[i], 1); y <= coord(hi[i], 1); ++y)
+        for (long long x = coord(lo[i], 0); x <= coord(hi[i], 0); ++x)
+          cells[(z * dims[1] + y) * dims[0] + x].push_back(static_cast<int>(i));
+  std::vector<const std::vector<int>*> lists;
+  std::vector<long long> keys;
+  for (const auto& [key, list] : cells)
+    if (list.size() > 1) {
+      lists.push_back(&list);
+      keys.push_back(key);
+    }
+  std::size_t count = 0;
+#pragma omp parallel for schedule(dynamic, 64) reduction(+ : count)
+  for (std::size_t c = 0; c < lists.size(); ++c) {
+    const auto& list = *lists[c];
+    const long long key = keys[c];
+    for (std::size_t i = 0; i < list.size(); ++i)
+      for (std::size_t j = i + 1; j < list.size(); ++j) {
+        const int f = list[i], g = list[j];
+        const Vector3d l = lo[f].cwiseMax(lo[g]), h = hi[f].cwiseMin(hi[g]);
+        if ((l.array() > h.array()).any()) continue;
+        // count the pair only in the cell holding the low corner of the box overlap
+        if ((coord(l, 2) * dims[1] + coord(l, 1)) * dims[0] + coord(l, 0) != key) continue;
+        if (triangles_intersect(mesh.positions, F[f], F[g])) ++count;
+      }
+  }
+  return count;
+}
+
+}  // namespace
+
+double triangle_quality(const Vector3d& a, const Vector3d& b, const Vector3d& c) {
+  const double s = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
+  const double area = 0.5 * (b - a).cross(c - a).norm();
+  return s > 0 ? 4.0 * std::sqrt(3.0) * area / s : 0.0;
+}
+
+bool MeshCheckReport::defect_free() const {
+  return edge_manifold() && nonmanifold_vertices == 0 && duplicate_faces == 0 &&
+         degenerate_faces == 0 && (!self_intersections_checked || self_intersections == 0);
+}
+
+MeshCheckReport check_mesh(const Mesh& mesh, const MeshCheckOptions& options) {
+  MeshCheckReport r;
+  const auto& P = mesh.positions;
+  const auto& F = mesh.triangles;
+  r.vertices = P.size();
+  r.faces = F.size();
+  r.topology = topology_stats(mesh);
+
+  std::vector<std::array<int, 3>> sorted(F);
+  for (auto& t : sorted) std::sort(t.begin(), t.end());
+  std::sort(sorted.begin(), sorted.end());
+  for (std::size_t i = 1; i < sorted.size(); ++i)
+    if (sorted[i] == sorted[i - 1]) ++r.duplicate_faces;
+
+  // Vertex manifoldness: the faces around v, joined when they share an edge through v.
+  std::vector<std::size_t> start(P.size() + 1, 0);
+  for (const auto& t : F)
+    for (int v : t) ++start[v + 1];
+  for (std::size_t v = 0; v < P.size(); ++v) start[v + 1] += start[v];
+  std::vector<int> incident(start.back());
+  {
+    std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t f = 0; f < F.size(); ++f)
+      for (int v : F[f]) incident[fill[v]++] = static_cast<int>(f);
+  }
+  for (std::size_t v = 0; v < P.size(); ++v) {
+    const std::size_t b = start[v], e = start[v + 1];
+    if (e - b < 2) continue;
+    std::vector<int> parent(e - b);
+    std::iota(parent.begin(), parent.end(), 0);
+    std::function<int(int)> find = [&](int x) {
+      return parent[x] == x ? x : parent[x] = find(parent[x]);
+    };
+    for (std::size_t i = b; i < e; ++i)
+      for (std::size_t j = i + 1; j < e; ++j) {
+        const auto& s = F[incident[i]];
+        const auto& t = F[incident[j]];
+        bool share = false;
+        for (int x : s)
+          if (x != static_cast<int>(v))
+            for (int y : t) share = share || x == y;
+        if (share) parent[find(static_cast<int>(i - b))] = find(static_cast<int>(j - b));
+      }
+    int roots = 0;
+    for (std::size_t i = 0; i < e - b; ++i)
+      roots += find(static_cast<int>(i)) == static_cast<int>(i);
+    if (roots > 1) ++r.nonmanifold_vertices;
+  }
+
+  double sum_angle = 0, sum_q = 0;
+  std::size_t good = 0;
+  r.min_angle_deg = F.empty() ? 0 : 180.0;
+  r.min_quality = F.empty() ? 0 : 1.0;
+  for (const auto& t : F) {
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
+      ++r.degenerate_faces;
+      r.min_angle_histogram[0]++;
+      r.min_angle_deg = 0;
+      r.min_quality = 0;
+      continue;
+    }
+    const Vector3d &a = P[t[0]], &b = P[t[1]], &c = P[t[2]];
+    if ((b - a).cross(c - a).squaredNorm() == 0) ++r.degenerate_faces;
+    auto angle = [](const Vector3d& p, const Vector3d& x, const Vector3d& y) {
+      const double d = (x - p).norm() * (y - p).norm();
+      return d > 0 ? std::acos(std::clamp((x - p).dot(y - p) / d, -1.0, 1.0)) * 180.0 / kPi : 0.0;
+    };
+    const double m = std::min({angle(a, b, c), angle(b, c, a), angle(c, a, b)});
+    const double q = triangle_quality(a, b, c);
+    r.min_angle_deg = std::min(r.min_angle_deg, m);
+    r.min_quality = std::min(r.min_quality, q);
+    sum_angle += m;
+    sum_q += q;
+    if (m >= 30.0) ++good;
+    r.min_angle_histogram[std::min<std::size_t>(11, static_cast<std::size_t>(m / 5.0))]++;
+  }
+  if (!F.empty()) {
+    r.mean_min_angle_deg = sum_angle / static_cast<double>(F.size());
+    r.mean_quality = sum_q / static_cast<double>(F.size());
+    r.fraction_min_angle_ge_30 = static_cast<double>(good) / static_cast<double>(F.size());
+  }
+  if (options.self_intersections) {
+    r.self_intersections = count_self_intersections(mesh);
+    r.self_intersections_checked = true;
+  }
+  return r;
+}
+
+std::string MeshCheckReport::to_text() const {
+  std::ostringstream o;
+  o << "vertices              " << vertices << "\n"
+    << "faces                 " << faces << "\n"
+    << "edges                 " << topology.edges << "\n"
+    << "duplicate faces       " << duplicate_faces << "\n"
+    << "degenerate faces      " << degenerate_faces << "\n"
+    << "non-manifold edges    " << topology.nonmanifold_edges << "\n"
+    << "non-manifold vertices " << nonmanifold_vertices << "\n"
+    << "inconsistent edges    " << topology.inconsistent_edges << "\n"
+    << "self-intersections    "
+    << (self_intersections_checked ? std::to_string(self_intersections) : "not checked") << "\n"
+    << "boundary loops        " << topology.boundary_loops;
+  if (!topology.boundary_loop_lengths.empty()) {
+    o << " (edges:";
+    for (std::size_t i = 0; i < topology.boundary_loop_lengths.size() && i < 10; ++i)
+      o << " " << topology.boundary_loop_lengths[i];
+    if (topology.boundary_loop_lengths.size() > 10) o << " ...";
+    o << ")";
+  }
+  o << "\n"
+    << "unreferenced vertices " << topology.unreferenced_vertices << "\n"
+    << "Euler characteristic  " << topology.euler_characteristic << "\n"
+    << "min angle [deg]       " << min_angle_deg << " (mean of per-face minima "
+    << mean_min_angle_deg << ")\n"
+    << "quality q             min " << min_quality << ", mean " << mean_quality
+    << "  (q = 4 sqrt3 A / sum l^2)\n"
+    << "faces min angle >= 30 " << 100.0 * fraction_min_angle_ge_30 << " %\n"
+    << "min-angle histogram   ";
+  for (std::size_t i = 0; i < min_angle_histogram.size(); ++i)
+    o << (i ? " " : "") << min_angle_histogram[i];
+  o << "  (5 deg bins from 0)\n"
+    << "edge-manifold         " << (edge_manifold() ? "yes" : "NO") << "\n";
+  return o.str();
+}
+
+}  // namespace scanmesh

@@ -1,0 +1,101 @@
+// Animated meshing (seed 003 §1: the mesh follows the moving skeleton) and the per-frame PLY
+// with stable vertex ids (docs/formats.md, "Particle frames").
+#include <cstring>
+#include <sstream>
+
+#include "scanmesh/core/atomic_file.h"
+#include "scanmesh/core/errors.h"
+#include "scanmesh/meshing/particles/particles.h"
+
+namespace scanmesh::particles {
+
+std::vector<AnimationFrame> animate(const SurfaceAtTime& surface_at, double t0, double t1,
+                                    int frames, const ParticleOptions& options,
+                                    int steps_per_frame) {
+  if (frames < 1 || steps_per_frame < 1)
+    throw InvalidInputError("particles: need frames >= 1 and steps_per_frame >= 1");
+  std::vector<AnimationFrame> out;
+  const auto first = surface_at(t0);
+  const Mesh start = marching_tetrahedra(*first, options.start_spacing * options.edge_length);
+  if (start.triangles.empty())
+    throw InvalidInputError("particles: the surface has no zero crossing at the first frame");
+  SpringNetwork net(start, options);
+  net.relax(*first);
+  out.push_back({t0, net.mesh(), net.vertex_ids(), 0});
+  for (int f = 1; f < frames; ++f) {
+    const double ta = t0 + (t1 - t0) * (f - 1) / (frames - 1);
+    const double tb = t0 + (t1 - t0) * f / (frames - 1);
+    const double tau = (tb - ta) / steps_per_frame;
+    int cuts = 0;
+    std::shared_ptr<const ImplicitSurface> s;
+    for (int k = 0; k < steps_per_frame; ++k) {
+      // The surface at the start of the sub-step, advancing by tau during it (dF/dt in eq. 8).
+      s = surface_at(ta + k * tau);
+      cuts += net.step(*s, tau).cuts;
+    }
+    s = surface_at(tb);
+    net.project(*s);
+    out.push_back({tb, net.mesh(), net.vertex_ids(), cuts});
+  }
+  return out;
+}
+
+namespace {
+void put_f32(std::vector<std::uint8_t>& b, float v) {
+  std::uint32_t u;
+  std::memcpy(&u, &v, 4);
+  for (int k = 0; k < 4; ++k) b.push_back(static_cast<std::uint8_t>(u >> (8 * k)));
+}
+void put_u32(std::vector<std::uint8_t>& b, std::uint32_t u) {
+  for (int k = 0; k < 4; ++k) b.push_back(static_cast<std::uint8_t>(u >> (8 * k)));
+}
+}  // namespace
+
+void write_ply_with_ids(const std::filesystem::path& path, const Mesh& mesh,
+                        const std::vector<std::uint64_t>& ids) {
+  if (ids.size() != mesh.positions.size())
+    throw InvalidInputError("write_ply_with_ids: one id per vertex needed");
+  std::ostringstream h;
+  h << "ply\nformat binary_little_endian 1.0\ncomment scanmesh particles frame\n"
+    << "element vertex " << mesh.positions.size()
+    << "\nproperty float x\nproperty float y\nproperty float z\nproperty uint id\n"
+    << "element face " << mesh.triangles.size()
+    << "\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string header = h.str();
+  std::vector<std::uint8_t> b(header.begin(), header.end());
+  for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
+    for (int a = 0; a < 3; ++a) put_f32(b, static_cast<float>(mesh.positions[i][a]));
+    if (ids[i] > 0xffffffffULL) throw InvalidInputError("write_ply_with_ids: id beyond 32 bits");
+    put_u32(b, static_cast<std::uint32_t>(ids[i]));
+  }
+  for (const auto& t : mesh.triangles) {
+    b.push_back(3);
+    for (int v : t) put_u32(b, static_cast<std::uint32_t>(v));
+  }
+  write_file_atomically(path, std::span<const std::uint8_t>(b));
+}
+
+std::vector<std::uint64_t> read_ply_ids(const std::filesystem::path& path) {
+  const std::vector<std::uint8_t> bytes = read_file_bytes(path);
+  const std::string text(bytes.begin(), bytes.end());
+  const std::string expect =
+      "property float x\nproperty float y\nproperty float z\nproperty uint id\n";
+  const auto end = text.find("end_header\n");
+  const auto vpos = text.find("element vertex ");
+  if (end == std::string::npos || vpos == std::string::npos ||
+      text.find(expect) == std::string::npos ||
+      text.find("format binary_little_endian 1.0") == std::string::npos)
+    throw FileFormatError(path, "not a scanmesh particle frame (x y z float + uint id)");
+  const std::size_t n = std::stoull(text.substr(vpos + 15));
+  const std::size_t data = end + 11;
+  if (bytes.size() < data + 16 * n) throw FileFormatError(path, "truncated vertex data");
+  std::vector<std::uint64_t> ids(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint8_t* p = bytes.data() + data + 16 * i + 12;
+    ids[i] = static_cast<std::uint64_t>(p[0]) | static_cast<std::uint64_t>(p[1]) << 8 |
+             static_cast<std::uint64_t>(p[2]) << 16 | static_cast<std::uint64_t>(p[3]) << 24;
+  }
+  return ids;
+}
+
+}  // namespace scanmesh::particles

@@ -1,0 +1,925 @@
+// The spring network of seed 003 §4.2-4.4 (eq. 8, 11-16, 17-23, 24-25). The iteration order
+// follows the digest's §5.2 proposal; every gap decision is marked "Gap:" and collected in
+// docs/particles.md.
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "scanmesh/core/errors.h"
+#include "scanmesh/meshing/particles/particles.h"
+
+namespace scanmesh::particles {
+
+using Eigen::Vector3d;
+
+namespace {
+
+std::uint64_t edge_key(int a, int b) {
+  if (a > b) std::swap(a, b);
+  return (static_cast<std::uint64_t>(a) << 32) | static_cast<std::uint32_t>(b);
+}
+int key_lo(std::uint64_t k) { return static_cast<int>(k >> 32); }
+int key_hi(std::uint64_t k) { return static_cast<int>(k & 0xffffffffu); }
+
+struct Spring {
+  double rest = 1.0;
+  double old_length = 0.0;  // |r|_alt of eq. (16)
+  int mark_iter = -1000;    // Rule 3: set in step k, protects during steps k and k+1
+  bool topo = false;        // §4.4 Step 1: persistent, never split
+  bool special = false;     // §4.4 Step 2: reduced rest length, never split
+};
+
+struct Vertex {
+  Vector3d p = Vector3d::Zero();
+  std::uint64_t id = 0;
+  bool alive = true;
+  bool boundary = false;  // on an open border (scan mode): pinned, never remeshed
+  bool defined = false;   // F could be evaluated at p this step
+  ImplicitValue f;
+  std::vector<int> faces;
+};
+
+struct Face {
+  std::array<int, 3> v{};
+  bool alive = true;
+};
+
+double min_angle(const Vector3d& a, const Vector3d& b, const Vector3d& c) {
+  auto ang = [](const Vector3d& p, const Vector3d& q, const Vector3d& r) {
+    const Vector3d u = q - p, w = r - p;
+    return std::atan2(u.cross(w).norm(), u.dot(w));
+  };
+  return std::min({ang(a, b, c), ang(b, c, a), ang(c, a, b)});
+}
+
+}  // namespace
+
+struct SpringNetwork::Impl {
+  ParticleOptions o;
+  std::vector<Vertex> verts;
+  std::vector<Face> faces;
+  std::unordered_map<std::uint64_t, Spring> springs;
+  std::uint64_t next_id = 0;
+  int iter = 0;
+  std::size_t dead_faces = 0, dead_verts = 0;
+
+  double R() const { return o.edge_length; }
+  const Vector3d& P(int v) const { return verts[v].p; }
+  double length(int a, int b) const { return (P(a) - P(b)).norm(); }
+
+  int add_vertex(const Vector3d& p) {
+    Vertex v;
+    v.p = p;
+    v.id = next_id++;
+    verts.push_back(std::move(v));
+    return static_cast<int>(verts.size()) - 1;
+  }
+  int add_face(int a, int b, int c) {
+    faces.push_back({{a, b, c}, true});
+    const int f = static_cast<int>(faces.size()) - 1;
+    for (int v : {a, b, c}) verts[v].faces.push_back(f);
+    return f;
+  }
+  void kill_face(int f) {
+    faces[f].alive = false;
+    ++dead_faces;
+    for (int v : faces[f].v) std::erase(verts[v].faces, f);
+  }
+  void kill_vertex(int v) {
+    verts[v].alive = false;
+    verts[v].faces.clear();
+    ++dead_verts;
+  }
+  // Faces containing both a and b.
+  std::vector<int> edge_faces(int a, int b) const {
+    std::vector<int> r;
+    for (int f : verts[a].faces) {
+      const auto& t = faces[f].v;
+      if (t[0] == b || t[1] == b || t[2] == b) r.push_back(f);
+    }
+    return r;
+  }
+  int opposite(int f, int a, int b) const {
+    for (int v : faces[f].v)
+      if (v != a && v != b) return v;
+    return -1;
+  }
+  // True if the face traverses a -> b.
+  bool has_directed(int f, int a, int b) const {
+    const auto& t = faces[f].v;
+    for (int k = 0; k < 3; ++k)
+      if (t[k] == a && t[(k + 1) % 3] == b) return true;
+    return false;
+  }
+  std::vector<int> neighbors(int a) const {
+    std::vector<int> r;
+    for (int f : verts[a].faces)
+      for (int v : faces[f].v)
+        if (v != a) r.push_back(v);
+    std::sort(r.begin(), r.end());
+    r.erase(std::unique(r.begin(), r.end()), r.end());
+    return r;
+  }
+  int valence(int a) const { return static_cast<int>(neighbors(a).size()); }
+  Vector3d face_normal(const std::array<int, 3>& t) const {
+    return (P(t[1]) - P(t[0])).cross(P(t[2]) - P(t[0]));
+  }
+  Spring& spring(int a, int b) { return springs.at(edge_key(a, b)); }
+  Spring make_spring(int a, int b, double rest) const {
+    Spring s;
+    s.rest = rest;
+    s.old_length = length(a, b);
+    return s;
+  }
+  void mark(int a, int b) {
+    const auto it = springs.find(edge_key(a, b));
+    if (it != springs.end()) it->second.mark_iter = iter;
+  }
+  bool marked(const Spring& s) const { return s.mark_iter >= iter - 1; }
+  static std::uint64_t edge_key_directed(int a, int b) {
+    return (static_cast<std::uint64_t>(a) << 32) | static_cast<std::uint32_t>(b);
+  }
+
+  // Rebuilds the spring map from the faces, keeping the data of springs that still exist.
+  void rebuild_springs() {
+    std::unordered_map<std::uint64_t, Spring> next;
+    next.reserve(springs.size() + 16);
+    for (const Face& f : faces) {
+      if (!f.alive) continue;
+      for (int k = 0; k < 3; ++k) {
+        const int a = f.v[k], b = f.v[(k + 1) % 3];
+        const std::uint64_t key = edge_key(a, b);
+        if (next.count(key)) continue;
+        const auto it = springs.find(key);
+        next.emplace(key, it != springs.end() ? it->second : make_spring(a, b, R()));
+      }
+    }
+    springs = std::move(next);
+  }
+
+  // Drops dead vertices and faces (indices change; ids do not).
+  void compact() {
+    std::vector<int> vmap(verts.size(), -1);
+    std::vector<Vertex> nv;
+    for (std::size_t i = 0; i < verts.size(); ++i)
+      if (verts[i].alive) {
+        vmap[i] = static_cast<int>(nv.size());
+        nv.push_back(std::move(verts[i]));
+        nv.back().faces.clear();
+      }
+    std::vector<Face> nf;
+    for (const Face& f : faces)
+      if (f.alive) nf.push_back({{vmap[f.v[0]], vmap[f.v[1]], vmap[f.v[2]]}, true});
+    for (std::size_t f = 0; f < nf.size(); ++f)
+      for (int v : nf[f].v) nv[v].faces.push_back(static_cast<int>(f));
+    std::unordered_map<std::uint64_t, Spring> ns;
+    ns.reserve(springs.size());
+    for (const auto& [k, s] : springs) {
+      const int a = vmap[key_lo(k)], b = vmap[key_hi(k)];
+      if (a >= 0 && b >= 0) ns.emplace(edge_key(a, b), s);
+    }
+    verts = std::move(nv);
+    faces = std::move(nf);
+    springs = std::move(ns);
+    dead_faces = dead_verts = 0;
+  }
+
+  void evaluate_all(const ImplicitSurface& s) {
+#pragma omp parallel for schedule(static)
+    for (std::size_t i = 0; i < verts.size(); ++i) {
+      Vertex& v = verts[i];
+      if (!v.alive) continue;
+      const auto f = s.evaluate(v.p);
+      v.defined = f.has_value();
+      if (f) v.f = *f;
+    }
+  }
+
+  // ---- Rule 1: midpoint collapse with the link condition ---------------------------------
+  bool try_collapse(int a, int b) {
+    if (verts[a].boundary || verts[b].boundary) return false;  // Gap: borders are pinned
+    const auto ef = edge_faces(a, b);
+    if (ef.size() != 2) return false;
+    const int c = opposite(ef[0], a, b), d = opposite(ef[1], a, b);
+    if (c == d) return false;
+    const auto na = neighbors(a), nb = neighbors(b);
+    std::vector<int> common;
+    std::set_intersection(na.begin(), na.end(), nb.begin(), nb.end(), std::back_inserter(common));
+    // Link condition (not in the report, needed for a manifold result): the common neighbours
+    // of a and b are exactly the two opposite vertices.
+    if (common.size() != 2) return false;
+    if (valence(c) <= 3 || valence(d) <= 3) return false;
+    if (na.size() + nb.size() - 4 < 3) return false;
+    const Vector3d m = 0.5 * (P(a) + P(b));
+    // No face around a or b may flip or degenerate when its corner moves to m.
+    for (int v : {a, b})
+      for (int f : verts[v].faces) {
+        if (f == ef[0] || f == ef[1]) continue;
+        auto t = faces[f].v;
+        const Vector3d before = face_normal(t);
+        for (int& x : t)
+          if (x == a || x == b) x = -1;
+        std::array<Vector3d, 3> q;
+        for (int k = 0; k < 3; ++k) q[k] = t[k] < 0 ? m : P(t[k]);
+        const Vector3d after = (q[1] - q[0]).cross(q[2] - q[0]);
+        if (after.dot(before) <= 0.2 * before.norm() * after.norm()) return false;
+        if (min_angle(q[0], q[1], q[2]) < 5.0 * std::numbers::pi / 180.0) return false;
+      }
+    kill_face(ef[0]);
+    kill_face(ef[1]);
+    for (int f : verts[b].faces) {
+      for (int& x : faces[f].v)
+        if (x == b) x = a;
+      verts[a].faces.push_back(f);
+    }
+    springs.erase(edge_key(a, b));
+    for (int x : nb) {
+      if (x == a) continue;
+      const auto it = springs.find(edge_key(b, x));
+      if (it == springs.end()) continue;
+      const Spring s = it->second;
+      springs.erase(it);
+      if (x != c && x != d) springs[edge_key(a, x)] = s;
+    }
+    verts[a].p = m;
+    verts[a].id = next_id++;  // a merged particle is a new particle (docs/particles.md)
+    kill_vertex(b);
+    for (int x : neighbors(a)) mark(a, x);
+    return true;
+  }
+
+  // ---- Rule 2: 2 -> 4 split at the midpoint ---------------------------------------------
+  bool try_split(int a, int b, const ImplicitSurface& surface) {
+    auto ef = edge_faces(a, b);
+    if (ef.size() != 2) return false;  // Gap: border edges are not split (scan mode)
+    if (!has_directed(ef[0], a, b)) std::swap(ef[0], ef[1]);
+    if (!has_directed(ef[0], a, b) || !has_directed(ef[1], b, a)) return false;
+    const int c = opposite(ef[0], a, b), d = opposite(ef[1], a, b);
+    const double rest = spring(a, b).rest;
+    Vector3d mid = 0.5 * (P(a) + P(b));
+    // Gap: the new particle is Newton-projected at once (the report lets eq. 8 do it).
+    if (const auto q = project_to_surface(surface, mid, 3);
+        q && (*q - mid).norm() < 0.5 * length(a, b))
+      mid = *q;
+    kill_face(ef[0]);
+    kill_face(ef[1]);
+    const int m = add_vertex(mid);
+    verts[m].f = verts[a].f;
+    verts[m].defined = false;
+    add_face(a, m, c);
+    add_face(m, b, c);
+    add_face(b, m, d);
+    add_face(m, a, d);
+    springs.erase(edge_key(a, b));
+    for (int x : {a, b, c, d}) springs[edge_key(m, x)] = make_spring(m, x, rest);
+    for (int x : {a, b, c, d}) mark(m, x);
+    mark(a, c), mark(b, c), mark(a, d), mark(b, d);
+    return true;
+  }
+
+  // ---- Edge flip towards valence 6 (not in the report; switchable) -----------------------
+  bool try_flip(int a, int b) {
+    auto ef = edge_faces(a, b);
+    if (ef.size() != 2) return false;
+    if (!has_directed(ef[0], a, b)) std::swap(ef[0], ef[1]);
+    if (!has_directed(ef[0], a, b) || !has_directed(ef[1], b, a)) return false;
+    const int c = opposite(ef[0], a, b), d = opposite(ef[1], a, b);
+    if (c == d || springs.count(edge_key(c, d))) return false;
+    auto target = [&](int v) { return verts[v].boundary ? 4 : 6; };
+    const int va = valence(a), vb = valence(b), vc = valence(c), vd = valence(d);
+    if (va <= 3 || vb <= 3) return false;
+    auto sq = [](int x) { return x * x; };
+    const int before =
+        sq(va - target(a)) + sq(vb - target(b)) + sq(vc - target(c)) + sq(vd - target(d));
+    const int after = sq(va - 1 - target(a)) + sq(vb - 1 - target(b)) + sq(vc + 1 - target(c)) +
+                      sq(vd + 1 - target(d));
+    if (after >= before) return false;
+    const std::array<int, 3> t0{a, d, c}, t1{b, c, d};
+    const Vector3d n0 = face_normal(t0), n1 = face_normal(t1);
+    const Vector3d old_n =
+        face_normal(faces[ef[0]].v).normalized() + face_normal(faces[ef[1]].v).normalized();
+    if (n0.dot(n1) < 0.5 * n0.norm() * n1.norm()) return false;  // no crease
+    if (n0.dot(old_n) <= 0.0 || n1.dot(old_n) <= 0.0) return false;
+    const double min_new = std::min(min_angle(P(a), P(d), P(c)), min_angle(P(b), P(c), P(d)));
+    const double min_old = std::min(min_angle(P(a), P(b), P(c)), min_angle(P(b), P(a), P(d)));
+    if (min_new < std::min(min_old, 10.0 * std::numbers::pi / 180.0)) return false;
+    const double rest =
+        0.25 * (spring(a, c).rest + spring(b, c).rest + spring(a, d).rest + spring(b, d).rest);
+    faces[ef[0]].v = t0;
+    faces[ef[1]].v = t1;
+    std::erase(verts[a].faces, ef[1]);
+    std::erase(verts[b].faces, ef[0]);
+    verts[c].faces.push_back(ef[1]);
+    verts[d].faces.push_back(ef[0]);
+    springs.erase(edge_key(a, b));
+    springs[edge_key(c, d)] = make_spring(c, d, rest);
+    mark(c, d), mark(a, c), mark(b, c), mark(a, d), mark(b, d);
+    return true;
+  }
+
+  // ---- Density correction (an addition; docs/particles.md) -------------------------------
+  // Rules 1-2 react only to single over-compressed or over-stretched springs. With a fixed
+  // particle count the network can settle uniformly compressed or stretched (all springs at
+  // 0.9 R, say), which no local rule sees. Then the mean stretch s = mean(|r| / R_e) tells how
+  // many particles are missing or superfluous (count ~ 1 / s^2); collapse the shortest or
+  // split the longest springs until that count is reached.
+  int rebalance(double mean_stretch, const ImplicitSurface& surface) {
+    std::size_t alive = 0;
+    for (const Vertex& v : verts) alive += v.alive ? 1 : 0;
+    const double change = static_cast<double>(alive) * (mean_stretch * mean_stretch - 1.0);
+    const int wanted = static_cast<int>(std::lround(std::abs(change)));
+    std::vector<std::pair<double, std::uint64_t>> order;
+    for (const auto& [k, sp] : springs)
+      order.emplace_back(length(key_lo(k), key_hi(k)) / sp.rest, k);
+    std::sort(order.begin(), order.end());
+    if (change > 0) std::reverse(order.begin(), order.end());
+    int done = 0;
+    for (const auto& [ratio, k] : order) {
+      if (done >= wanted) break;
+      const auto it = springs.find(k);
+      if (it == springs.end() || marked(it->second) || it->second.topo || it->second.special)
+        continue;
+      const int a = key_lo(k), b = key_hi(k);
+      if (change < 0 ? try_collapse(a, b) : try_split(a, b, surface)) ++done;
+    }
+    return done;
+  }
+  double mean_stretch() const {
+    double sum = 0.0;
+    for (const auto& [k, sp] : springs) sum += length(key_lo(k), key_hi(k)) / sp.rest;
+    return springs.empty() ? 1.0 : sum / static_cast<double>(springs.size());
+  }
+
+  // ---- §4.3: curvature-adaptive rest lengths, eq. (17)-(23) -------------------------------
+  void adapt_rest_lengths() {
+    double sum = 0.0;
+    std::size_t count = 0;
+    std::vector<std::pair<Spring*, double>> cosines;
+    cosines.reserve(springs.size());
+    for (auto& [k, s] : springs) {
+      const Vertex &va = verts[key_lo(k)], &vb = verts[key_hi(k)];
+      if (!va.defined || !vb.defined) continue;
+      const double na = va.f.gradient.norm(), nb = vb.f.gradient.norm();
+      if (!(na > 0.0 && nb > 0.0)) continue;
+      const double c = std::clamp(va.f.gradient.dot(vb.f.gradient) / (na * nb), -1.0, 1.0);
+      cosines.emplace_back(&s, c);
+      if (!s.special && !s.topo) sum += c, ++count;
+    }
+    if (count == 0) return;
+    const double cos_beta = sum / static_cast<double>(count);  // the mean over all springs
+    const double lo = R() * (1.0 - o.lambda), hi = R() * (1.0 + o.lambda);
+    for (auto [s, cos_alpha] : cosines) {
+      if (s->special || s->topo) continue;
+      const double l = s->old_length;  // Gap: l is the current length |r| (stored this step)
+      const double denom = std::max(1.0 - cos_alpha, 1e-12);  // flat spring: clamp decides
+      const double delta = l * (std::sqrt((1.0 - cos_beta) / denom) - 1.0);  // eq. (21)
+      s->rest = std::clamp(l + o.theta * delta, lo, hi);                     // (22), (23)
+    }
+  }
+
+  // ---- §4.4 Step 1 and 2 ------------------------------------------------------------------
+  int mark_gap_springs(const ImplicitSurface& surface) {
+    int marked_now = 0;
+    const double cos_eps = std::cos(o.gap_angle_deg * std::numbers::pi / 180.0);
+    for (auto& [k, s] : springs) {
+      if (s.topo) continue;
+      const Vertex &va = verts[key_lo(k)], &vb = verts[key_hi(k)];
+      if (!va.defined || !vb.defined) continue;
+      const Vector3d ga = va.f.gradient, gb = vb.f.gradient;
+      const Vector3d r = va.p - vb.p;
+      const double rl = r.norm();
+      if (!(rl > 0.0)) continue;
+      const bool diverging = ga.dot(gb) < 0.0;
+      double cos_gamma = 0.0;
+      if (ga.norm() > 0.0) cos_gamma = std::max(cos_gamma, std::abs(ga.dot(r)) / (ga.norm() * rl));
+      if (gb.norm() > 0.0) cos_gamma = std::max(cos_gamma, std::abs(gb.dot(r)) / (gb.norm() * rl));
+      if (!diverging && cos_gamma <= cos_eps) continue;
+      const auto fm = surface.evaluate(0.5 * (va.p + vb.p));
+      if (!fm || !(fm->value > 0.0)) continue;  // eq. (24): the midpoint lies outside
+      s.topo = true;
+      ++marked_now;
+    }
+    if (marked_now == 0 && !any_topo_) return 0;
+    any_topo_ = true;
+    // Step 2: the third edge of a triangle with exactly two marked edges becomes special.
+    for (const Face& f : faces) {
+      if (!f.alive) continue;
+      int n = 0, third = -1;
+      for (int k = 0; k < 3; ++k) {
+        if (springs.at(edge_key(f.v[k], f.v[(k + 1) % 3])).topo)
+          ++n;
+        else
+          third = k;
+      }
+      if (n != 2) continue;
+      Spring& s = springs.at(edge_key(f.v[third], f.v[(third + 1) % 3]));
+      s.special = true;
+    }
+    return marked_now;
+  }
+  bool any_topo_ = false;
+
+  // ---- §4.4 Step 3: ring detection (eq. 25) and the cut with two closing fans ------------
+  int cut_rings(const ImplicitSurface& surface) {
+    std::unordered_map<std::uint64_t, bool> qualifies;
+    auto qual = [&](int a, int b) {
+      const std::uint64_t k = edge_key(a, b);
+      if (const auto it = qualifies.find(k); it != qualifies.end()) return it->second;
+      bool q = false;
+      const Vertex &va = verts[a], &vb = verts[b];
+      if (va.defined && vb.defined) {
+        const double na = va.f.gradient.norm(), nb = vb.f.gradient.norm();
+        if (na > 0.0 && nb > 0.0 && va.f.gradient.dot(vb.f.gradient) / (na * nb) < o.epsilon2) {
+          const auto fm = surface.evaluate(0.5 * (va.p + vb.p));
+          q = fm && fm->value > o.epsilon1 * R() * fm->gradient.norm() && fm->value > 0.0;
+        }
+      }
+      qualifies.emplace(k, q);
+      return q;
+    };
+    // Candidates: triangles with exactly two qualifying edges (eq. 25.1-3).
+    std::unordered_map<int, std::array<int, 3>> cand;  // face -> qualifying flags
+    for (std::size_t f = 0; f < faces.size(); ++f) {
+      if (!faces[f].alive) continue;
+      const auto& t = faces[f].v;
+      std::array<int, 3> q{};
+      int n = 0;
+      for (int k = 0; k < 3; ++k) n += (q[k] = qual(t[k], t[(k + 1) % 3]) ? 1 : 0);
+      if (n == 2) cand.emplace(static_cast<int>(f), q);
+    }
+    if (cand.size() < 3) return 0;
+    std::vector<int> order;
+    for (const auto& [f, q] : cand) order.push_back(f);
+    std::sort(order.begin(), order.end());
+    std::unordered_set<int> visited;
+    int cuts = 0;
+    for (int start : order) {
+      if (visited.count(start) || !faces[start].alive) continue;
+      // Walk the dual cycle through qualifying shared edges (eq. 25.1, closed by 25.4).
+      std::vector<int> ring;
+      bool closed = false, broken = false;
+      int prev = -1, cur = start;
+      while (true) {
+        visited.insert(cur);
+        ring.push_back(cur);
+        const auto& t = faces[cur].v;
+        const auto& q = cand.at(cur);
+        std::vector<int> nbr;
+        for (int k = 0; k < 3; ++k) {
+          if (!q[k]) continue;
+          const auto ef = edge_faces(t[k], t[(k + 1) % 3]);
+          if (ef.size() != 2) {
+            broken = true;
+            break;
+          }
+          const int other = ef[0] == cur ? ef[1] : ef[0];
+          if (!cand.count(other)) {
+            broken = true;
+            break;
+          }
+          nbr.push_back(other);
+        }
+        if (broken || nbr.size() != 2 || nbr[0] == nbr[1]) {
+          broken = true;
+          break;
+        }
+        const int next = prev < 0 ? std::min(nbr[0], nbr[1]) : (nbr[0] == prev ? nbr[1] : nbr[0]);
+        if (next == start) {
+          closed = true;
+          break;
+        }
+        if (visited.count(next)) {
+          broken = true;
+          break;
+        }
+        prev = cur;
+        cur = next;
+      }
+      if (broken || !closed || ring.size() < 3) continue;
+      if (cut_ring(ring, cand, surface)) ++cuts;
+    }
+    if (cuts) {
+      rebuild_springs();
+      return cuts;
+    }
+    // Gap: no clean ring (e.g. a twisted band of spanning triangles whose constricted feet
+    // could not be collapsed further). Every candidate triangle spans the gap (its qualifying
+    // edges join end points with gradients >= 90 deg apart through the outside), so remove
+    // them all and close the holes with fans.
+    bool all_spanning = true;
+    for (const auto& [f, q] : cand) all_spanning = all_spanning && faces[f].alive;
+    if (!all_spanning) return 0;
+    for (int f : order) kill_face(f);
+    for (std::size_t i = 0; i < verts.size(); ++i)
+      if (verts[i].alive && verts[i].faces.empty()) kill_vertex(static_cast<int>(i));
+    close_new_holes(surface);
+    return 1;
+  }
+
+  // Closes every hole that is not an original border by a fan to a new particle at its
+  // centroid (Newton-projected). A hole whose border is not a simple loop stays open.
+  void close_new_holes(const ImplicitSurface& surface) {
+    std::unordered_map<int, std::vector<int>> next;  // x -> y of border half-edges x -> y
+    // A vertex where two hole borders touch (two outgoing border half-edges) would make the
+    // fan non-manifold: remove it with its triangles, widening the hole (at most 8 rounds).
+    for (int round = 0; round < 8; ++round) {
+      next.clear();
+      // Border half-edges: a face has x -> y and no face has y -> x.
+      std::unordered_set<std::uint64_t> half;
+      for (const Face& f : faces)
+        if (f.alive)
+          for (int k = 0; k < 3; ++k) half.insert(edge_key_directed(f.v[k], f.v[(k + 1) % 3]));
+      for (std::uint64_t h : half) {
+        const int x = static_cast<int>(h >> 32), y = static_cast<int>(h & 0xffffffffu);
+        if (half.count(edge_key_directed(y, x))) continue;
+        if (verts[x].boundary && verts[y].boundary) continue;  // an original border (scan)
+        next[x].push_back(y);
+      }
+      std::vector<int> pinched;
+      for (const auto& [x, ys] : next)
+        if (ys.size() > 1 && !verts[x].boundary) pinched.push_back(x);
+      if (pinched.empty()) break;
+      std::sort(pinched.begin(), pinched.end());
+      for (int v : pinched) {
+        const std::vector<int> around = verts[v].faces;
+        for (int f : around)
+          if (faces[f].alive) kill_face(f);
+        kill_vertex(v);
+      }
+      for (std::size_t i = 0; i < verts.size(); ++i)
+        if (verts[i].alive && verts[i].faces.empty()) kill_vertex(static_cast<int>(i));
+    }
+    std::vector<int> starts;
+    for (const auto& [x, ys] : next) starts.push_back(x);
+    std::sort(starts.begin(), starts.end());
+    std::unordered_set<int> used;
+    for (int x0 : starts) {
+      if (used.count(x0)) continue;
+      std::vector<int> loop;
+      int x = x0;
+      bool simple = true;
+      while (true) {
+        const auto it = next.find(x);
+        if (it == next.end() || it->second.size() != 1 || used.count(x)) {
+          simple = false;
+          break;
+        }
+        used.insert(x);
+        loop.push_back(x);
+        x = it->second.front();
+        if (x == x0) break;
+      }
+      if (!simple || loop.size() < 3) continue;  // left open (reported by the mesh checks)
+      Vector3d c = Vector3d::Zero();
+      for (int v : loop) c += P(v);
+      c /= static_cast<double>(loop.size());
+      if (const auto q = project_to_surface(surface, c, 5); q && (*q - c).norm() < 2.0 * R())
+        c = *q;
+      const int centre = add_vertex(c);
+      for (std::size_t k = 0; k < loop.size(); ++k)
+        add_face(loop[(k + 1) % loop.size()], loop[k], centre);
+    }
+    for (std::size_t i = 0; i < verts.size(); ++i)
+      if (verts[i].alive && verts[i].faces.empty()) kill_vertex(static_cast<int>(i));
+    rebuild_springs();
+  }
+
+  // §4.4 names a second sub-problem, "removing triangles whose vertices no longer lie on the
+  // surface", without an algorithm. Gap: a particle farther than R from F = 0 (first-order
+  // distance |F|/|grad F|; a vanishing gradient with F > 0 means it sits in the empty gap
+  // between separated parts) is removed with its triangles, and every hole this opens is
+  // closed by a fan to a new particle at the hole's centroid, as in the ring cut.
+  int remove_lost_particles(const ImplicitSurface& surface) {
+    std::vector<int> lost;
+    for (std::size_t i = 0; i < verts.size(); ++i) {
+      const Vertex& v = verts[i];
+      if (!v.alive || v.boundary || !v.defined) continue;
+      const double g = v.f.gradient.norm();
+      if (g < 1e-10 ? v.f.value > 0.0 : std::abs(v.f.value) > R() * g)
+        lost.push_back(static_cast<int>(i));
+    }
+    if (lost.empty()) return 0;
+    for (int v : lost) {
+      const std::vector<int> around = verts[v].faces;
+      for (int f : around)
+        if (faces[f].alive) kill_face(f);
+    }
+    for (int v : lost) kill_vertex(v);
+    close_new_holes(surface);
+    return static_cast<int>(lost.size());
+  }
+
+  bool cut_ring(const std::vector<int>& ring,
+                const std::unordered_map<int, std::array<int, 3>>& cand,
+                const ImplicitSurface& surface) {
+    const std::unordered_set<int> in_ring(ring.begin(), ring.end());
+    // The third (non-qualifying) edge of each ring triangle borders the hole after the cut.
+    struct Border {
+      int x, y;  // direction in the triangle outside the ring
+    };
+    std::vector<Border> border;
+    for (int f : ring) {
+      const auto& t = faces[f].v;
+      const auto& q = cand.at(f);
+      for (int k = 0; k < 3; ++k) {
+        if (q[k]) continue;
+        const int u = t[k], v = t[(k + 1) % 3];
+        const auto ef = edge_faces(u, v);
+        if (ef.size() != 2) return false;
+        const int other = ef[0] == f ? ef[1] : ef[0];
+        if (in_ring.count(other)) return false;
+        border.push_back(has_directed(other, u, v) ? Border{u, v} : Border{v, u});
+      }
+    }
+    // Group the border edges into loops: exactly two, each simple with >= 3 edges.
+    std::unordered_map<int, std::vector<int>> incident;
+    for (std::size_t e = 0; e < border.size(); ++e) {
+      incident[border[e].x].push_back(static_cast<int>(e));
+      incident[border[e].y].push_back(static_cast<int>(e));
+    }
+    for (const auto& [v, es] : incident)
+      if (es.size() != 2) return false;
+    std::vector<int> loop_of(border.size(), -1);
+    int loops = 0;
+    for (std::size_t e0 = 0; e0 < border.size(); ++e0) {
+      if (loop_of[e0] >= 0) continue;
+      std::vector<int> stack{static_cast<int>(e0)};
+      loop_of[e0] = loops;
+      while (!stack.empty()) {
+        const int e = stack.back();
+        stack.pop_back();
+        for (int v : {border[e].x, border[e].y})
+          for (int e2 : incident[v])
+            if (loop_of[e2] < 0) loop_of[e2] = loops, stack.push_back(e2);
+      }
+      ++loops;
+    }
+    if (loops != 2) return false;
+    std::array<int, 2> loop_size{0, 0};
+    std::array<Vector3d, 2> centroid{Vector3d::Zero(), Vector3d::Zero()};
+    for (std::size_t e = 0; e < border.size(); ++e) {
+      ++loop_size[loop_of[e]];
+      centroid[loop_of[e]] += P(border[e].x);  // each loop vertex is the tail of one edge
+    }
+    if (loop_size[0] < 3 || loop_size[1] < 3) return false;
+    // Cut: drop the ring, insert one particle per side "in the middle of the hole" (Gap: at
+    // the loop centroid, Newton-projected, not at the cut midpoints in the gap) and close
+    // each hole with a fan (Bild 4d).
+    std::unordered_set<int> ring_vertices;
+    for (int f : ring)
+      for (int v : faces[f].v) ring_vertices.insert(v);
+    for (int f : ring) kill_face(f);
+    std::array<int, 2> centre{};
+    for (int l = 0; l < 2; ++l) {
+      Vector3d c = centroid[l] / loop_size[l];
+      if (const auto q = project_to_surface(surface, c, 5); q && (*q - c).norm() < 2.0 * R())
+        c = *q;
+      centre[l] = add_vertex(c);
+    }
+    for (std::size_t e = 0; e < border.size(); ++e)
+      add_face(border[e].y, border[e].x, centre[loop_of[e]]);
+    for (int v : ring_vertices)
+      if (verts[v].alive && verts[v].faces.empty()) kill_vertex(v);
+    return true;
+  }
+};
+
+SpringNetwork::SpringNetwork(const Mesh& start, const ParticleOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.o = options;
+  const ParticleOptions& o = options;
+  if (!(o.edge_length > 0.0) || !(o.rho > 0.0) || !(o.time_step_factor > 0.0) || !(o.d_min > 0.0) ||
+      !(o.d_max > 2.0 * o.d_min) || !(o.moving_epsilon >= 0.0) ||
+      !(o.theta >= 0.0 && o.theta <= 1.0) || !(o.lambda >= 0.0 && o.lambda < 1.0) ||
+      !(o.special_factor > 0.0 && o.special_factor <= 1.0) || !(o.max_step > 0.0))
+    throw InvalidInputError(
+        "particles: impossible options (need edge_length, rho > 0, d_max > 2 d_min, theta in "
+        "[0,1], lambda in [0,1), special_factor in (0,1])");
+  start.validate();
+  for (const auto& p : start.positions) m.add_vertex(p);
+  for (const auto& t : start.triangles) {
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
+      throw InvalidInputError("particles: degenerate start triangle");
+    m.add_face(t[0], t[1], t[2]);
+  }
+  // Every edge: at most two faces, traversed in opposite directions.
+  std::unordered_map<std::uint64_t, int> count;
+  for (const auto& t : start.triangles)
+    for (int k = 0; k < 3; ++k) ++count[m.edge_key_directed(t[k], t[(k + 1) % 3])];
+  for (const auto& [k, n] : count) {
+    const int a = static_cast<int>(k >> 32), b = static_cast<int>(k & 0xffffffffu);
+    if (n > 1) throw InvalidInputError("particles: start mesh is not consistently oriented");
+    if (!count.count(m.edge_key_directed(b, a))) m.verts[a].boundary = m.verts[b].boundary = true;
+  }
+  for (auto& v : m.verts)
+    if (v.faces.empty()) v.alive = false, ++m.dead_verts;
+  m.rebuild_springs();
+}
+
+SpringNetwork::~SpringNetwork() = default;
+SpringNetwork::SpringNetwork(SpringNetwork&&) noexcept = default;
+SpringNetwork& SpringNetwork::operator=(SpringNetwork&&) noexcept = default;
+
+StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_time_step) {
+  Impl& m = *impl_;
+  const ParticleOptions& o = m.o;
+  StepReport rep;
+  ++m.iter;
+  if (m.dead_faces > m.faces.size() / 2 || m.dead_verts > m.verts.size() / 2) m.compact();
+  m.evaluate_all(surface);
+
+  // Time step: the explicit Euler step stays non-oscillating for the stiffest local mode of
+  // eq. (12) (stiffness ~ rho * valence), so dt = factor / (rho * max valence).
+  std::size_t max_valence = 6;
+  for (const Vertex& v : m.verts)
+    if (v.alive) max_valence = std::max(max_valence, v.faces.size());
+  const double dt = o.time_step_factor / (o.rho * static_cast<double>(max_valence));
+  rep.time_step = dt;
+
+  if (o.adaptive) m.adapt_rest_lengths();
+  if (o.topology_change) {
+    rep.new_topology_marks = m.mark_gap_springs(surface);
+    // Step 2: special springs shrink gradually towards special_factor * R_e (the report
+    // gives no rate; a sudden drop would make eq. 12 explode).
+    for (auto& [k, s] : m.springs)
+      if (s.special) s.rest = std::max(o.special_factor * m.R(), 0.7 * s.rest);
+  }
+
+  // Eq. (12)-(13): P_i = sum_j r_ij rho (R_e - |r_ij|) / R_e over the one-ring.
+  std::vector<Vector3d> force(m.verts.size(), Vector3d::Zero());
+  for (const auto& [k, s] : m.springs) {
+    const int a = key_lo(k), b = key_hi(k);
+    const Vector3d r = m.P(a) - m.P(b);
+    const double l = r.norm();
+    const double sij = o.rho * (s.rest - l) / s.rest;
+    force[a] += sij * r;
+    force[b] -= sij * r;
+  }
+  // Eq. (8) and (11): constraint velocity with feedback phi; phi * dt = 1 (one Newton step).
+  const double cap = o.max_step * m.R();
+  for (std::size_t i = 0; i < m.verts.size(); ++i) {
+    Vertex& v = m.verts[i];
+    if (!v.alive || !v.defined) continue;  // Gap: a particle where F is undefined waits
+    const Vector3d g = v.f.gradient;
+    const double g2 = g.squaredNorm();
+    const Vector3d p_target = v.boundary ? Vector3d::Zero() : force[i];
+    Vector3d move = dt * p_target;
+    if (g2 > 1e-20) {
+      rep.max_constraint = std::max(rep.max_constraint, std::abs(v.f.value) / std::sqrt(g2));
+      const Vector3d tangential = dt * (p_target - g.dot(p_target) / g2 * g);
+      rep.max_tangential_move = std::max(rep.max_tangential_move, tangential.norm());
+      move = tangential - (v.f.dvalue_dt * surface_time_step + v.f.value) / g2 * g;
+    }
+    const double len = move.norm();
+    if (len > cap) move *= cap / len;
+    v.p += move;
+  }
+
+  // §4.4 Step 2: special springs that became short are removed (collapsed, Rule 1).
+  std::vector<std::uint64_t> keys;
+  keys.reserve(m.springs.size());
+  for (const auto& [k, s] : m.springs) keys.push_back(k);
+  std::sort(keys.begin(), keys.end());
+  if (o.topology_change)
+    for (std::uint64_t k : keys) {
+      const auto it = m.springs.find(k);
+      if (it == m.springs.end() || !it->second.special) continue;
+      const int a = key_lo(k), b = key_hi(k);
+      if (!m.verts[a].alive || !m.verts[b].alive) continue;
+      if (m.length(a, b) < o.special_min_length * m.R() && m.try_collapse(a, b))
+        ++rep.special_collapses;
+    }
+
+  // Rules 1-4: collapse (14) / split (15) settled (16), unmarked (Rule 3) springs.
+  for (std::uint64_t k : keys) {
+    const auto it = m.springs.find(k);
+    if (it == m.springs.end()) continue;
+    const Spring s = it->second;
+    const int a = key_lo(k), b = key_hi(k);
+    if (m.marked(s)) continue;
+    const double l = m.length(a, b);
+    if (std::abs(s.old_length - l) > o.moving_epsilon * s.rest) continue;  // still moving
+    if (l < o.d_min * s.rest) {
+      if (m.try_collapse(a, b)) ++rep.collapses;
+    } else if (l > o.d_max * s.rest && !s.topo && !s.special) {
+      if (m.try_split(a, b, surface)) ++rep.splits;
+    }
+  }
+  if (o.flips) {
+    keys.clear();
+    for (const auto& [k, s] : m.springs) keys.push_back(k);
+    std::sort(keys.begin(), keys.end());
+    for (std::uint64_t k : keys) {
+      const auto it = m.springs.find(k);
+      if (it == m.springs.end() || m.marked(it->second) || it->second.topo) continue;
+      if (m.try_flip(key_lo(k), key_hi(k))) ++rep.flips;
+    }
+  }
+  if (o.flips) {
+    // Valence-3 particles cannot be repaired by flips (a flip never lowers the valence of a
+    // vertex below 4 here); remove them by collapsing their shortest spring.
+    for (std::size_t i = 0; i < m.verts.size(); ++i) {
+      const int v = static_cast<int>(i);
+      if (!m.verts[i].alive || m.verts[i].boundary || m.verts[i].faces.size() != 3) continue;
+      auto ring = m.neighbors(v);
+      std::sort(ring.begin(), ring.end(),
+                [&](int x, int y) { return m.length(v, x) < m.length(v, y); });
+      for (int x : ring) {
+        if (m.marked(m.spring(v, x))) continue;
+        if (m.try_collapse(v, x)) {
+          ++rep.collapses;
+          break;
+        }
+      }
+    }
+  }
+  if (o.topology_change && m.any_topo_) {
+    m.evaluate_all(surface);
+    rep.cuts = m.cut_rings(surface);
+  }
+  if (o.topology_change && m.any_topo_ && m.remove_lost_particles(surface) > 0) ++rep.cuts;
+  for (auto& [k, s] : m.springs) s.old_length = m.length(key_lo(k), key_hi(k));
+  return rep;
+}
+
+int SpringNetwork::relax(const ImplicitSurface& surface) {
+  Impl& m = *impl_;
+  int quiet = 0, n = 0, rounds = 0;
+  for (; n < m.o.max_iterations; ++n) {
+    const StepReport r = step(surface);
+    const bool calm =
+        !r.changed() && r.max_tangential_move < m.o.convergence_tolerance * m.o.edge_length;
+    quiet = calm ? quiet + 1 : 0;
+    if (quiet < 10) continue;
+    // Converged: correct a uniform compression or stretch (at most 8 rounds), else stop.
+    const double s = m.mean_stretch();
+    if (std::abs(s - 1.0) > 0.03 && rounds < 8 && m.rebalance(s, surface) > 0) {
+      ++rounds;
+      quiet = 0;
+      continue;
+    }
+    ++n;
+    break;
+  }
+  project(surface);
+  return n;
+}
+
+void SpringNetwork::project(const ImplicitSurface& surface) {
+  Impl& m = *impl_;
+#pragma omp parallel for schedule(static)
+  for (std::size_t i = 0; i < m.verts.size(); ++i) {
+    Vertex& v = m.verts[i];
+    if (!v.alive) continue;
+    if (const auto q = project_to_surface(surface, v.p, 20, 1e-13);
+        q && (*q - v.p).norm() < m.o.edge_length)
+      v.p = *q;
+  }
+  for (auto& [k, s] : m.springs) s.old_length = m.length(key_lo(k), key_hi(k));
+}
+
+Mesh SpringNetwork::mesh() const {
+  const Impl& m = *impl_;
+  Mesh out;
+  std::vector<int> map(m.verts.size(), -1);
+  for (std::size_t i = 0; i < m.verts.size(); ++i)
+    if (m.verts[i].alive) {
+      map[i] = static_cast<int>(out.positions.size());
+      out.positions.push_back(m.verts[i].p);
+    }
+  for (const Face& f : m.faces)
+    if (f.alive) out.triangles.push_back({map[f.v[0]], map[f.v[1]], map[f.v[2]]});
+  return out;
+}
+
+std::vector<std::uint64_t> SpringNetwork::vertex_ids() const {
+  std::vector<std::uint64_t> ids;
+  for (const Vertex& v : impl_->verts)
+    if (v.alive) ids.push_back(v.id);
+  return ids;
+}
+
+std::size_t SpringNetwork::vertex_count() const {
+  std::size_t n = 0;
+  for (const Vertex& v : impl_->verts) n += v.alive ? 1 : 0;
+  return n;
+}
+
+int SpringNetwork::iteration() const { return impl_->iter; }
+
+ParticleMeshResult particle_mesh(const ImplicitSurface& surface, const ParticleOptions& options) {
+  const Mesh start = marching_tetrahedra(surface, options.start_spacing * options.edge_length);
+  if (start.triangles.empty())
+    throw InvalidInputError("particles: the surface has no zero crossing inside its bounds");
+  SpringNetwork net(start, options);
+  ParticleMeshResult r;
+  r.iterations = net.relax(surface);
+  r.mesh = net.mesh();
+  r.vertex_ids = net.vertex_ids();
+  return r;
+}
+
+}  // namespace scanmesh::particles
