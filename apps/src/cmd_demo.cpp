@@ -77,8 +77,8 @@ nlohmann::json curvature_against_truth(const SurfaceFields& f, const sim::Simula
     normal_deg.push_back(
         std::acos(std::clamp(f.normal[k].cast<double>().dot(t.normal), -1.0, 1.0)) * 180.0 /
         std::numbers::pi);
-    if (std::abs(t.mean_curvature()) > 0.005)
-      h_err.push_back(std::abs(f.mean(k) - t.mean_curvature()) / std::abs(t.mean_curvature()));
+    if (std::abs(t.mean()) > 0.005)
+      h_err.push_back(std::abs(f.mean(k) - t.mean()) / std::abs(t.mean()));
   }
   auto median = [](std::vector<double> v) {
     if (v.empty()) return 0.0;

@@ -1,7 +1,6 @@
 // Continuous scan surface: bicubic Hermite patches over the grid nodes (docs/reconstruction.md).
 #include "scanmesh/reconstruction/scan_surface.h"
 
-#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
@@ -57,21 +56,13 @@ Eigen::Vector3d SurfaceJet::normal() const {
 }
 
 SurfaceCurvature SurfaceJet::curvature() const {
-  SurfaceCurvature out;
-  out.normal = normal();
+  const Eigen::Vector3d n = normal();
   Eigen::Matrix2d first, second;
   first << d_phi.dot(d_phi), d_phi.dot(d_h), d_phi.dot(d_h), d_h.dot(d_h);
   // Minus sign: with the outward normal a convex surface has X_uu . n < 0, and the project's
   // convention is k > 0 for convex.
-  second << -d_phiphi.dot(out.normal), -d_phih.dot(out.normal), -d_phih.dot(out.normal),
-      -d_hh.dot(out.normal);
-  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::Matrix2d> solver(second, first);
-  out.k2 = solver.eigenvalues()(0);
-  out.k1 = solver.eigenvalues()(1);
-  const Eigen::Vector2d a1 = solver.eigenvectors().col(1), a2 = solver.eigenvectors().col(0);
-  out.dir1 = (a1(0) * d_phi + a1(1) * d_h).normalized();
-  out.dir2 = (a2(0) * d_phi + a2(1) * d_h).normalized();
-  return out;
+  second << -d_phiphi.dot(n), -d_phih.dot(n), -d_phih.dot(n), -d_hh.dot(n);
+  return curvature_from_fundamental_forms(d_phi, d_h, n, first, second);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -105,16 +105,8 @@ std::optional<SurfaceCurvature> fit_quadric(const std::vector<Eigen::Vector3d>& 
   first << 1 + d * d, d * e, d * e, 1 + e * e;
   // Graph over the tangent plane with n pointing outward: w'' < 0 is convex (k > 0).
   second << -2 * a / g, -b / g, -b / g, -2 * cc / g;
-  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::Matrix2d> solver(second, first);
-  SurfaceCurvature out;
   const Eigen::Vector3d du = t1 + d * n, dv = t2 + e * n;
-  out.normal = du.cross(dv).normalized();
-  out.k2 = solver.eigenvalues()(0);
-  out.k1 = solver.eigenvalues()(1);
-  const Eigen::Vector2d a1 = solver.eigenvectors().col(1), a2 = solver.eigenvectors().col(0);
-  out.dir1 = (a1(0) * du + a1(1) * dv).normalized();
-  out.dir2 = (a2(0) * du + a2(1) * dv).normalized();
-  return out;
+  return curvature_from_fundamental_forms(du, dv, du.cross(dv).normalized(), first, second);
 }
 
 Eigen::Vector3d pca_normal(const std::vector<Eigen::Vector3d>& pts,

@@ -96,7 +96,7 @@ TEST(Shapes, EllipsoidCurvaturesAtAxisEnds) {
   EXPECT_NEAR(std::abs(g.dir1.z()), 1.0, 1e-12);
   // Gaussian curvature at (0, 0, c) is c^2 / (a^2 b^2).
   const auto top = geometry_at(*e, {0, 0, c});
-  EXPECT_NEAR(top.gauss_curvature(), c * c / (a * a * b * b), 1e-12);
+  EXPECT_NEAR(top.gauss(), c * c / (a * a * b * b), 1e-12);
   const auto hit = e->intersect({300, 0, 0}, {-1, 0, 0}, 0.0, 300.0);
   ASSERT_TRUE(hit);
   EXPECT_NEAR(*hit, 300.0 - a, 1e-12);

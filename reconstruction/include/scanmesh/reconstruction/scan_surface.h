@@ -12,23 +12,13 @@
 #include <vector>
 
 #include "scanmesh/core/range_grid.h"
+#include "scanmesh/core/surface_curvature.h"
 
 namespace scanmesh {
 
 //! r and its partial derivatives in (phi [rad], h [mm]) at one parameter point.
 struct RadiusJet {
   double r = 0, r_phi = 0, r_h = 0, r_phiphi = 0, r_phih = 0, r_hh = 0;
-};
-
-//! Normal and principal curvatures of the surface at a point. Normal points away from the
-//! axis (outward for a scanned object); k > 0 where the surface bends away from the normal
-//! (a sphere of radius R has k1 = k2 = 1/R); k1 >= k2; dir1, dir2 unit principal directions.
-struct SurfaceCurvature {
-  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
-  double k1 = 0, k2 = 0;
-  Eigen::Vector3d dir1 = Eigen::Vector3d::Zero(), dir2 = Eigen::Vector3d::Zero();
-  double mean() const { return 0.5 * (k1 + k2); }
-  double gauss() const { return k1 * k2; }
 };
 
 //! Position and first/second derivatives of X(phi, h) = (r cos phi, r sin phi, h).

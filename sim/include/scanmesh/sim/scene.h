@@ -12,19 +12,14 @@
 #include <vector>
 
 #include "scanmesh/core/color.h"
+#include "scanmesh/core/surface_curvature.h"
 
 namespace scanmesh::sim {
 
 //! Exact differential geometry of a surface point. Normal points outward; curvatures use the
 //! convention k > 0 where the surface bends away from the normal (a sphere of radius R has
 //! k1 = k2 = 1/R); k1 >= k2; dir1/dir2 are unit principal directions.
-struct SurfaceGeometry {
-  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
-  double k1 = 0.0, k2 = 0.0;
-  Eigen::Vector3d dir1 = Eigen::Vector3d::Zero(), dir2 = Eigen::Vector3d::Zero();
-  double mean_curvature() const { return 0.5 * (k1 + k2); }
-  double gauss_curvature() const { return k1 * k2; }
-};
+using SurfaceGeometry = SurfaceCurvature;
 
 //! Value, gradient and Hessian of an implicit function. Convention for all objects: value < 0
 //! inside, > 0 outside, gradient pointing outward.
