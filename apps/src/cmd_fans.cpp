@@ -2,6 +2,8 @@
 #include <iomanip>
 #include <iostream>
 
+#include <filesystem>
+
 #include "cli_support.h"
 #include "commands.h"
 #include "pipeline.h"
@@ -16,7 +18,10 @@ namespace scanmesh::cli {
 int run_fans(const FansArgs& args) {
   args.options.validate();
   const std::vector<Eigen::Vector3d> cloud = read_point_cloud(args.cloud);
-  const FanResult result = build_fans(cloud, args.options);
+  FanOptions options = args.options;
+  // A grid's cells come from a turntable scan: their outside is away from the axis.
+  if (std::filesystem::path(args.cloud).extension() == ".smg") options.orient_away_from_axis = true;
+  const FanResult result = build_fans(cloud, options);
   const FanStats& s = result.stats;
   write_ply(args.out, result.mesh);
   if (!args.render_png.empty()) write_png(args.render_png, render_views(result.mesh));

@@ -195,9 +195,14 @@ void compute_normals(Context& ctx) {
       }
     }
   };
-  start(static_cast<int>(ctx.opt.seed % static_cast<std::uint64_t>(n)));
-  for (int s = 0; s < n; ++s)
-    if (!done[s]) start(s);
+  if (ctx.opt.orient_away_from_axis) {
+    for (int c = 0; c < n; ++c)
+      if (ref[c].dot(Vector3d(pts[c].x(), pts[c].y(), 0.0)) < 0) ref[c] = -ref[c];
+  } else {
+    start(static_cast<int>(ctx.opt.seed % static_cast<std::uint64_t>(n)));
+    for (int s = 0; s < n; ++s)
+      if (!done[s]) start(s);
+  }
   for (int c = 0; c < n; ++c)
     if (ctx.normals[c].dot(ref[c]) < 0) ctx.normals[c] = -ctx.normals[c];
 }

@@ -32,8 +32,12 @@ struct FanOptions {
   double max_normal_angle_deg = 0.0;  //!< reject neighbours whose normal deviates more; 0: off
   int max_hole_edges = 12;   //!< close holes left by disagreeing fans up to this length; 0: off
   bool pca_normals = false;  //!< PCA normals for every point instead of the 3-NN plane
-  std::uint64_t seed = 1;    //!< picks the start point of the normal orientation (determinism)
-  int threads = 0;           //!< OpenMP threads; 0: default. Output does not depend on it.
+  //! Orient every normal away from the z axis instead of propagating one orientation over the
+  //! neighbour graph: right for clouds from a turntable scan (a RangeGrid's cells), whose
+  //! outside is known, and robust where noise splits the neighbour graph (hair).
+  bool orient_away_from_axis = false;
+  std::uint64_t seed = 1;  //!< picks the start point of the normal orientation (determinism)
+  int threads = 0;         //!< OpenMP threads; 0: default. Output does not depend on it.
 
   //! Throws InvalidInputError for impossible values.
   void validate() const;
