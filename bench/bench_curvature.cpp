@@ -14,6 +14,7 @@
 #include <functional>
 #include <vector>
 
+#include "bench_support.h"
 #include "scanmesh/reconstruction/surface_fields.h"
 #include "scanmesh/sim/range_scanner.h"
 
@@ -27,16 +28,7 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-// Median wall time of `runs` calls, in seconds.
-double time_median(int runs, const std::function<void()>& f) {
-  std::vector<double> t;
-  for (int k = 0; k < runs; ++k) {
-    const auto start = std::chrono::steady_clock::now();
-    f();
-    t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-  }
-  return median(t);
-}
+using bench::time_median;
 
 bool away_from_holes(const RangeGrid& g, int i, int j, int margin) {
   for (int dj = -margin; dj <= margin; ++dj) {

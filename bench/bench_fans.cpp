@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "../tests/meshing/fans/fan_test_clouds.h"
+#include "bench_support.h"
 #include "scanmesh/meshing/fans/fans.h"
 #include "scanmesh/meshing/mesh_check.h"
 #include "scanmesh/sim/range_scanner.h"
@@ -26,9 +27,7 @@ using Eigen::Vector3d;
 
 namespace {
 
-double now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
+using bench::now;
 
 struct Row {
   std::string cloud, method;

@@ -19,6 +19,7 @@
 #include <numbers>
 #include <vector>
 
+#include "bench_support.h"
 #include "implicit_adapters.h"
 #include "scanmesh/meshing/mesh_topology.h"
 #include "scanmesh/meshing/particles/particles.h"
@@ -29,9 +30,7 @@ using Eigen::Vector3d;
 
 namespace {
 
-double now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
+using bench::now;
 
 struct Row {
   std::string name;

@@ -1,16 +1,12 @@
 #include <gtest/gtest.h>
 
 #include "scanmesh/meshing/mesh_topology.h"
+#include "test_meshes.h"
 
 namespace scanmesh {
 namespace {
 
-Mesh tetrahedron() {
-  Mesh m;
-  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-  m.triangles = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
-  return m;
-}
+using test::tetrahedron;
 
 TEST(MeshTopology, ClosedTetrahedronHasNoBoundaryAndEulerTwo) {
   const TopologyStats t = topology_stats(tetrahedron());

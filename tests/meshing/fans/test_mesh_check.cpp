@@ -3,18 +3,14 @@
 
 #include <filesystem>
 
+#include "../test_meshes.h"
 #include "scanmesh/core/image.h"
 #include "scanmesh/meshing/mesh_check.h"
 
 namespace scanmesh {
 namespace {
 
-Mesh tetrahedron() {
-  Mesh m;
-  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-  m.triangles = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
-  return m;
-}
+using test::tetrahedron;
 
 TEST(MeshCheck, CleanTetrahedronHasNoDefects) {
   const MeshCheckReport r = check_mesh(tetrahedron());
