@@ -3,13 +3,28 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "scanmesh/acquisition/grid_cleaning.h"
 #include "scanmesh/meshing/grid_mesh.h"
 
+namespace CLI {
+class App;
+}
+
 namespace scanmesh::cli {
+
+// A subcommand registered by a stage's cmd_<stage>.cpp: the parsed CLI11 subcommand and what
+// runs it. A stage adds `void register_<stage>_commands(CLI::App&, CommandList&)` below and one
+// call in main.cpp; its argument structs live in the closure (e.g. a shared_ptr).
+struct RegisteredCommand {
+  CLI::App* command = nullptr;
+  std::function<int()> run;
+};
+using CommandList = std::vector<RegisteredCommand>;
 
 struct SimArgs {
   std::string scene;    //!< empty: built-in head

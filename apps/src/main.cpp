@@ -183,6 +183,9 @@ int main(int argc, char** argv) {
   add_cleaning_options(*demo_cmd, demo.cleaning);
   add_mesh_options(*demo_cmd, demo.meshing);
 
+  // Stages added later register their subcommands here, one line each (commands.h).
+  CommandList commands;
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -201,6 +204,8 @@ int main(int argc, char** argv) {
   }
 
   return run_guarded([&] {
+    for (const auto& c : commands)
+      if (*c.command) return c.run();
     if (*sim_cmd) return run_sim(sim);
     if (*info_cmd) return run_info(info);
     if (*export_cmd) return run_export(exp);
