@@ -23,6 +23,9 @@ int run_guarded(const std::function<int()>& command) {
   } catch (const IoError& e) {
     std::cerr << "scanmesh: I/O error: " << e.what() << "\n";
     return kIoFailure;
+  } catch (const DeviceError& e) {
+    std::cerr << "scanmesh: device error: " << e.what() << "\n";
+    return kDeviceFailure;
   } catch (const std::bad_alloc&) {
     std::cerr << "scanmesh: out of memory\n";
     return kInternalError;

@@ -38,4 +38,16 @@ class IoError : public Error {
   using Error::Error;
 };
 
+//! A device (camera, turntable board) failed, vanished, stalled or answered nonsense. The
+//! message names the device (path, bus:address or VID:PID) and, in a scan, the step.
+class DeviceError : public Error {
+ public:
+  DeviceError(const std::string& device, const std::string& problem)
+      : Error(device + ": " + problem), device_(device) {}
+  const std::string& device() const { return device_; }
+
+ private:
+  std::string device_;
+};
+
 }  // namespace scanmesh
