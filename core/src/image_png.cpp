@@ -73,7 +73,10 @@ void write_png(const std::filesystem::path& path, const Image8& image) {
 }
 
 Image8 read_png(const std::filesystem::path& path) {
-  const std::vector<std::uint8_t> bytes = read_file_bytes(path);
+  return decode_png(read_file_bytes(path), path);
+}
+
+Image8 decode_png(std::span<const std::uint8_t> bytes, const std::filesystem::path& path) {
   png_image png{};
   png.version = PNG_IMAGE_VERSION;
   if (!png_image_begin_read_from_memory(&png, bytes.data(), bytes.size()))

@@ -419,8 +419,9 @@ std::uint8_t to_color(double v, Scalar t) {
 
 }  // namespace
 
-Mesh read_ply(const std::filesystem::path& path) {
-  const std::vector<std::uint8_t> bytes = read_file_bytes(path);
+Mesh read_ply(const std::filesystem::path& path) { return parse_ply(read_file_bytes(path), path); }
+
+Mesh parse_ply(std::span<const std::uint8_t> bytes, const std::filesystem::path& path) {
   const Header header = parse_header(bytes, path);
   const auto fail = [&](const std::string& problem) { throw FileFormatError(path, problem); };
 

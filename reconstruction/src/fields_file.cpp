@@ -95,6 +95,8 @@ std::vector<std::uint8_t> encode_fields(const SurfaceFields& f) {
   return out;
 }
 
+}  // namespace
+
 SurfaceFields decode_fields(std::span<const std::uint8_t> bytes,
                             const std::filesystem::path& source) {
   const auto fail = [&](const std::string& problem) { throw FileFormatError(source, problem); };
@@ -182,8 +184,6 @@ SurfaceFields decode_fields(std::span<const std::uint8_t> bytes,
   }
   return f;
 }
-
-}  // namespace
 
 void write_fields(const std::filesystem::path& path, const SurfaceFields& fields) {
   const std::vector<std::uint8_t> bytes = encode_fields(fields);

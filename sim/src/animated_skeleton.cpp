@@ -74,7 +74,7 @@ AnimatedSkeleton AnimatedSkeleton::from_yaml_text(const std::string& text,
     if (const YAML::Node pos = f["positions"]) {
       if (!pos.IsMap()) rd.fail(pos, who + ": 'positions' must map element names to positions");
       for (const auto& kv : pos) {
-        const std::string nm = kv.first.as<std::string>();
+        const std::string nm = rd.as<std::string>(kv.first, who + ": an element name");
         const auto it = std::find_if(s.elements.begin(), s.elements.end(),
                                      [&](const SkeletonElement& e) { return e.name == nm; });
         if (it == s.elements.end()) rd.fail(kv.first, who + ": unknown element '" + nm + "'");

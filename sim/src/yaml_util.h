@@ -40,7 +40,8 @@ class YamlReader {
                   std::initializer_list<const char*> allowed) const {
     if (!map.IsMap()) fail(map, where + " must be a mapping");
     for (const auto& kv : map) {
-      const std::string key = kv.first.as<std::string>();
+      // A key may itself be a list or a mapping (`? [a]: 1`): not a string, so an error here.
+      const std::string key = as<std::string>(kv.first, where + ": a key");
       bool ok = false;
       for (const char* a : allowed) ok = ok || key == a;
       if (!ok) fail(kv.first, where + ": unknown key '" + key + "'");

@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstring>
+#include <optional>
 #include <sstream>
 #include <string_view>
 
@@ -23,6 +24,15 @@ bool parse_double(std::string_view s, double& out) {
   if (s.front() == '+') s.remove_prefix(1);
   const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
   return ec == std::errc() && ptr == s.data() + s.size();
+}
+
+// A whole header word as a non-negative integer no larger than `max`; nullopt otherwise (no
+// std::atoi: out-of-range text is undefined behaviour there).
+std::optional<long long> parse_header_count(const std::string& s, long long max) {
+  long long v = 0;
+  const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (ec != std::errc() || ptr != s.data() + s.size() || v < 0 || v > max) return std::nullopt;
+  return v;
 }
 
 std::vector<std::string_view> split_fields(std::string_view line) {
@@ -104,15 +114,23 @@ std::vector<Eigen::Vector3d> parse_pcd(const std::string& bytes,
     std::string key;
     in >> key;
     std::string tok;
+    const auto count_word = [&](const std::string& word) {
+      // SIZE is 1..8 bytes and COUNT a few thousand at most in any real PCD.
+      const auto v = parse_header_count(word, 1 << 20);
+      if (!v)
+        throw FileFormatError(source, "PCD " + key + " value '" + word.substr(0, 24) +
+                                          "' is not an integer in 0..1048576");
+      return static_cast<int>(*v);
+    };
     if (key == "VERSION") {
     } else if (key == "FIELDS") {
       while (in >> tok) fields.push_back(tok);
     } else if (key == "SIZE") {
-      while (in >> tok) sizes.push_back(std::atoi(tok.c_str()));
+      while (in >> tok) sizes.push_back(count_word(tok));
     } else if (key == "TYPE") {
       while (in >> tok) types.push_back(tok.empty() ? '?' : tok[0]);
     } else if (key == "COUNT") {
-      while (in >> tok) counts.push_back(std::atoi(tok.c_str()));
+      while (in >> tok) counts.push_back(count_word(tok));
     } else if (key == "WIDTH") {
       in >> width;
     } else if (key == "HEIGHT") {
@@ -136,9 +154,12 @@ std::vector<Eigen::Vector3d> parse_pcd(const std::string& bytes,
   if (sizes.size() != fields.size() || types.size() != fields.size() ||
       counts.size() != fields.size())
     throw FileFormatError(source, "PCD FIELDS, SIZE, TYPE and COUNT differ in length");
-  if (points < 0) points = width * height;
-  if (points < 0 || width < 0 || height < 0 || points != width * height)
-    throw FileFormatError(source, "PCD POINTS does not equal WIDTH x HEIGHT");
+  // Overflow-safe WIDTH x HEIGHT (hostile headers declare 9e18 x 9e18).
+  long long area = 0;
+  if (width < 0 || height < 0 || __builtin_mul_overflow(width, height, &area))
+    throw FileFormatError(source, "PCD WIDTH x HEIGHT is negative or too large");
+  if (points < 0) points = area;
+  if (points != area) throw FileFormatError(source, "PCD POINTS does not equal WIDTH x HEIGHT");
   std::array<int, 3> xyz{-1, -1, -1};
   std::vector<std::size_t> offset(fields.size(), 0), column(fields.size(), 0);
   std::size_t stride = 0, ncols = 0;
@@ -158,6 +179,16 @@ std::vector<Eigen::Vector3d> parse_pcd(const std::string& bytes,
     if (types[f] != 'F' || (sizes[f] != 4 && sizes[f] != 8))
       throw FileFormatError(source, "PCD x/y/z must be TYPE F with SIZE 4 or 8");
   }
+  if (data != "ascii" && data != "binary")
+    throw FileFormatError(source, "PCD DATA '" + data + "' is not supported (ascii or binary)");
+  // The declared point count is checked against the bytes that follow the header before anything
+  // is reserved: an ASCII point takes at least one character per value (plus separators), a
+  // binary point exactly `stride` bytes.
+  const std::size_t remaining = bytes.size() - pos;
+  const std::size_t min_point_bytes = data == "binary" ? stride : 2 * ncols - 1;
+  if (static_cast<unsigned long long>(points) > remaining / min_point_bytes + 1)
+    throw FileFormatError(source, "PCD declares " + std::to_string(points) + " points but only " +
+                                      std::to_string(remaining) + " bytes of data follow");
   std::vector<Eigen::Vector3d> pts;
   pts.reserve(static_cast<std::size_t>(points));
   if (data == "ascii") {
@@ -191,8 +222,11 @@ std::vector<Eigen::Vector3d> parse_pcd(const std::string& bytes,
       throw FileFormatError(source, "PCD is truncated: " + std::to_string(read) + " of " +
                                         std::to_string(points) + " points");
   } else if (data == "binary") {
-    const std::size_t need = stride * static_cast<std::size_t>(points);
-    if (bytes.size() - pos < need) throw FileFormatError(source, "PCD binary data is truncated");
+    if (static_cast<unsigned long long>(points) > remaining / stride)
+      throw FileFormatError(source, "PCD binary data is truncated: " + std::to_string(points) +
+                                        " points of " + std::to_string(stride) +
+                                        " bytes declared, " + std::to_string(remaining) +
+                                        " bytes present");
     for (long long i = 0; i < points; ++i) {
       const char* rec = bytes.data() + pos + static_cast<std::size_t>(i) * stride;
       Eigen::Vector3d v;

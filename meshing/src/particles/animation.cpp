@@ -1,5 +1,6 @@
 // Animated meshing (seed 003 §1: the mesh follows the moving skeleton) and the per-frame PLY
 // with stable vertex ids (docs/formats.md, "Particle frames").
+#include <charconv>
 #include <cstring>
 #include <sstream>
 
@@ -86,9 +87,20 @@ std::vector<std::uint64_t> read_ply_ids(const std::filesystem::path& path) {
       text.find(expect) == std::string::npos ||
       text.find("format binary_little_endian 1.0") == std::string::npos)
     throw FileFormatError(path, "not a scanmesh particle frame (x y z float + uint id)");
-  const std::size_t n = std::stoull(text.substr(vpos + 15));
+  // The count is checked against the bytes present before anything is allocated (a hostile
+  // count must neither throw from std::stoull nor wrap the size check).
+  std::size_t n = 0;
+  const char* count_begin = text.data() + vpos + 15;
+  const char* count_end = text.data() + text.size();
+  const auto [count_stop, count_error] = std::from_chars(count_begin, count_end, n);
+  if (count_error != std::errc() || count_stop == count_begin ||
+      (*count_stop != '\n' && *count_stop != '\r'))
+    throw FileFormatError(path, "vertex count is not a non-negative integer");
   const std::size_t data = end + 11;
-  if (bytes.size() < data + 16 * n) throw FileFormatError(path, "truncated vertex data");
+  if (n > (bytes.size() - data) / 16)
+    throw FileFormatError(path, "truncated vertex data: " + std::to_string(n) +
+                                    " vertices of 16 bytes declared, " +
+                                    std::to_string(bytes.size() - data) + " bytes present");
   std::vector<std::uint64_t> ids(n);
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint8_t* p = bytes.data() + data + 16 * i + 12;

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <span>
 #include <vector>
 
 #include "scanmesh/core/color.h"
@@ -32,5 +33,7 @@ void write_png(const std::filesystem::path& path, const Image8& image);
 //! Reads an 8-bit grey/RGB/RGBA PNG (16-bit and palette images are converted to 8-bit).
 //! Throws FileFormatError for anything that is not a readable PNG.
 Image8 read_png(const std::filesystem::path& path);
+//! The same decoder on bytes already in memory; `source` names them in errors.
+Image8 decode_png(std::span<const std::uint8_t> bytes, const std::filesystem::path& source);
 
 }  // namespace scanmesh

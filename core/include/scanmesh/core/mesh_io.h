@@ -2,7 +2,9 @@
 // reader. All writers are atomic (docs/formats.md, "Mesh files").
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
+#include <span>
 #include <string>
 
 #include "scanmesh/core/mesh.h"
@@ -19,6 +21,8 @@ void write_ply(const std::filesystem::path& path, const Mesh& mesh,
 //! fan-triangulated); a face `label` property is read when present. Unknown properties are
 //! skipped. Throws FileFormatError naming the file and the problem.
 Mesh read_ply(const std::filesystem::path& path);
+//! The same reader on bytes already in memory; `source` names them in errors.
+Mesh parse_ply(std::span<const std::uint8_t> bytes, const std::filesystem::path& source);
 
 //! Writes OBJ with v / vn / vt / f. When `texture_png` is non-empty, writes `<stem>.mtl`
 //! beside it referencing the texture (map_Kd) and the OBJ uses that material.
