@@ -55,8 +55,11 @@ void export_pcd(const std::filesystem::path& path, const RangeGrid& grid) {
         path.parent_path().empty() ? std::filesystem::path(".") : path.parent_path());
     std::error_code ignored;
     std::filesystem::remove(tmp, ignored);
-    throw IoError("cannot write '" + path.string() +
-                  "': " + (dir_missing ? std::string("No such file or directory") : reason));
+    // PCL reports no errno; say what it said and what usually causes it.
+    throw IoError("cannot write '" + path.string() + "': " +
+                  (dir_missing ? std::string("No such file or directory")
+                               : "the PCD writer failed (" + reason +
+                                     "); check free disk space, quotas and file size limits"));
   }
   commit_temporary_file(tmp, path);
 }

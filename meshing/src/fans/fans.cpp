@@ -247,6 +247,9 @@ class FanBuilder {
       last = ctx_.knn[c * kNormalNeighbours + k];
     double d_prev = -1.0;
     double d = last >= 0 ? (pts[last] - pts[c]).norm() * (1 + 1e-9) : ctx_.grid.cell_edge();
+    // Duplicated points put every stored neighbour at distance 0; a zero radius would never
+    // grow below (2 * 0 = 0) and the loop would spin forever (found by tests/hostile).
+    if (!(d > 0)) d = ctx_.grid.cell_edge();
     d = std::min(d, ctx_.d_max);
     const int* first = &ctx_.knn[static_cast<std::size_t>(c) * kNormalNeighbours];
     const double r1_2 = d * d;
