@@ -7,6 +7,7 @@
 #include "cli_support.h"
 #include "commands.h"
 #include "pipeline.h"
+#include "scanmesh/core/errors.h"
 #include "scanmesh/core/image.h"
 #include "scanmesh/core/mesh_io.h"
 #include "scanmesh/meshing/fans/fans.h"
@@ -21,7 +22,14 @@ int run_fans(const FansArgs& args) {
   FanOptions options = args.options;
   // A grid's cells come from a turntable scan: their outside is away from the axis.
   if (std::filesystem::path(args.cloud).extension() == ".smg") options.orient_away_from_axis = true;
-  const FanResult result = build_fans(cloud, options);
+  FanResult result;
+  try {
+    result = build_fans(cloud, options);
+  } catch (const InvalidInputError& e) {
+    // The cloud itself cannot be meshed (too few points, all coincident): name the file.
+    throw InvalidInputError(args.cloud + ": " + e.what() + " (the fan mesher needs at least 3 "
+                            "distinct points spread over a surface)");
+  }
   const FanStats& s = result.stats;
   write_ply(args.out, result.mesh);
   if (!args.render_png.empty()) write_png(args.render_png, render_views(result.mesh));

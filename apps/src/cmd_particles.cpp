@@ -62,11 +62,8 @@ Eigen::AlignedBox3d find_bounds(const sim::Scene& scene) {
 }
 
 std::string read_text(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw IoError("cannot open " + path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
+  const std::vector<std::uint8_t> bytes = read_file_bytes(path);  // IoError names path + reason
+  return std::string(bytes.begin(), bytes.end());
 }
 
 nlohmann::json mesh_json(const Mesh& m) {

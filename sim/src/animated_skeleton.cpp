@@ -100,11 +100,7 @@ AnimatedSkeleton AnimatedSkeleton::from_yaml_text(const std::string& text,
 }
 
 AnimatedSkeleton AnimatedSkeleton::from_yaml_file(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw IoError("cannot open scene file " + path.string());
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return from_yaml_text(ss.str(), path.string());
+  return from_yaml_text(detail::read_text_file(path), path.string());
 }
 
 std::vector<SkeletonElement> AnimatedSkeleton::elements_at(double t) const {

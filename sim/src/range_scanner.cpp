@@ -127,11 +127,7 @@ ScannerConfig ScannerConfig::from_yaml_text(const std::string& text,
 }
 
 ScannerConfig ScannerConfig::from_yaml_file(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError("cannot open scanner file " + path.string());
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return from_yaml_text(ss.str(), path.string());
+  return from_yaml_text(detail::read_text_file(path), path.string());
 }
 
 ScannerConfig builtin_head_scanner() {

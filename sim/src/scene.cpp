@@ -227,11 +227,7 @@ Scene Scene::from_yaml_text(const std::string& text, const std::string& source_n
 }
 
 Scene Scene::from_yaml_file(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError("cannot open scene file " + path.string());
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return from_yaml_text(ss.str(), path.string());
+  return from_yaml_text(detail::read_text_file(path), path.string());
 }
 
 std::optional<RayHit> Scene::intersect(const Vector3d& origin, const Vector3d& unit_dir,

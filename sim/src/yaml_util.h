@@ -8,9 +8,16 @@
 #include <initializer_list>
 #include <string>
 
+#include "scanmesh/core/atomic_file.h"
 #include "scanmesh/core/errors.h"
 
 namespace scanmesh::sim::detail {
+
+//! The whole file as text; IoError "cannot open '<path>': <OS reason>" when it cannot be read.
+inline std::string read_text_file(const std::filesystem::path& path) {
+  const std::vector<std::uint8_t> bytes = read_file_bytes(path);
+  return std::string(bytes.begin(), bytes.end());
+}
 
 class YamlReader {
  public:
