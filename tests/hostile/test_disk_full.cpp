@@ -15,13 +15,24 @@
 namespace scanmesh::hostile {
 namespace {
 
-constexpr long long kTinyLimit = 64;  // bytes: smaller than every file scanmesh writes
+// Bytes: smaller than every file the commands below write from the 64 x 48 scan. The sanitizer
+// tree links clang's libomp, which needs a 1 KB shared-memory file before main, hence 1 KB there.
+#ifdef SCANMESH_LLVM_OPENMP
+constexpr long long kTinyLimit = 1024;
+#else
+constexpr long long kTinyLimit = 64;
+#endif
+
+// A 64 x 48 scan: big enough that every output (even the depth PNG) exceeds kTinyLimit.
+constexpr const char* kScannerYaml =
+    "n_phi: 64\nn_h: 48\nradius_mm: 300.0\nh0_mm: 30.0\ndh_mm: 3.0\nnoise_sigma_mm: 0.05\n"
+    "spike_probability: 0.0\nband_min_mm: 0.0\nband_max_mm: 212.0\nseed: 3\n";
 
 class DiskFull : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     in_ = new fs::path(scratch_dir("disk_full_inputs"));
-    write_text(*in_ / "scanner.yaml", kSmallScannerYaml);
+    write_text(*in_ / "scanner.yaml", kScannerYaml);
     const RunResult sim =
         run_cli({"sim", "--scene", (kConfigs / "sim" / "sphere.yaml").string(), "--scanner",
                  (*in_ / "scanner.yaml").string(), "--out", (*in_ / "scan.smg").string()});
@@ -83,8 +94,11 @@ TEST_F(DiskFull, Sim) {
 }
 
 TEST_F(DiskFull, ExportEveryFormat) {
-  for (const char* flag_and_name :
-       {"--pcd=cloud.pcd", "--ply=cloud.ply", "--texture=t.png", "--depth=d.png"}) {
+  std::vector<const char*> outputs = {"--pcd=cloud.pcd", "--ply=cloud.ply", "--texture=t.png"};
+#ifndef SCANMESH_LLVM_OPENMP
+  outputs.push_back("--depth=d.png");  // ~700 bytes: below the 1 KB limit of the sanitizer tree
+#endif
+  for (const char* flag_and_name : outputs) {
     const std::string s(flag_and_name);
     const std::string flag = s.substr(0, s.find('=')), name = s.substr(s.find('=') + 1);
     expect_io_error_and_nothing_lost({"export", in("scan.smg"), flag, out(name)}, {name});
