@@ -81,10 +81,22 @@ inline std::string describe(const std::vector<std::string>& args, const RunResul
   return s + "\n  exit " + std::to_string(r.exit_code) + ", output:\n" + r.output;
 }
 
+//! The per-process root of every scratch folder; removed when the test program ends.
+inline fs::path scratch_root() {
+  struct Root {
+    fs::path path = fs::temp_directory_path() / ("scanmesh_hostile_" + std::to_string(getpid()));
+    ~Root() {
+      std::error_code ignored;
+      fs::remove_all(path, ignored);
+    }
+  };
+  static const Root root;
+  return root.path;
+}
+
 //! A fresh, empty scratch folder for one test.
 inline fs::path scratch_dir(const std::string& name) {
-  const fs::path dir =
-      fs::temp_directory_path() / ("scanmesh_hostile_" + std::to_string(getpid())) / name;
+  const fs::path dir = scratch_root() / name;
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
