@@ -8,6 +8,7 @@
 #include <unordered_set>
 
 #include "scanmesh/core/errors.h"
+#include "scanmesh/meshing/mesh_topology.h"
 #include "scanmesh/meshing/particles/particles.h"
 
 namespace scanmesh::particles {
@@ -288,7 +289,8 @@ struct SpringNetwork::Impl {
     const int c = opposite(ef[0], a, b), d = opposite(ef[1], a, b);
     if (c == d || springs.count(edge_key(c, d))) return false;
     auto target = [&](int v) { return verts[v].boundary ? 4 : 6; };
-    const int va = valence(a), vb = valence(b), vc = valence(c), vd = valence(d);
+    const int va = fast_valence(a), vb = fast_valence(b), vc = fast_valence(c),
+              vd = fast_valence(d);
     if (va <= 3 || vb <= 3) return false;
     auto sq = [](int x) { return x * x; };
     const int before =
@@ -420,6 +422,94 @@ struct SpringNetwork::Impl {
     return marked_now;
   }
   bool any_topo_ = false;
+
+  int fast_valence(int v) const {
+    return static_cast<int>(verts[v].faces.size()) + (verts[v].boundary ? 1 : 0);
+  }
+
+  // ---- Remeshing polish (an addition; docs/particles.md) ---------------------------------
+  // Tangential relaxation: every free particle moves towards the area-weighted centroid of
+  // its triangles' centroids (one Lloyd-like step), within the tangent plane, and is then
+  // Newton-projected onto F = 0.
+  void smooth(const ImplicitSurface& surface, double weight) {
+    std::vector<Vector3d> next(verts.size());
+#pragma omp parallel for schedule(static) if (verts.size() > 4000)
+    for (std::size_t i = 0; i < verts.size(); ++i) {
+      const Vertex& v = verts[i];
+      next[i] = v.p;
+      if (!v.alive || v.boundary || v.faces.empty()) continue;
+      Vector3d c = Vector3d::Zero(), n = Vector3d::Zero();
+      double area = 0.0;
+      for (int f : v.faces) {
+        const auto& t = faces[f].v;
+        const Vector3d nf = face_normal(t);
+        const double a = nf.norm();
+        c += a * (P(t[0]) + P(t[1]) + P(t[2])) / 3.0;
+        n += nf;
+        area += a;
+      }
+      if (!(area > 0.0)) continue;
+      c /= area;
+      const auto f = surface.evaluate(v.p);
+      if (f && f->gradient.squaredNorm() > 1e-20) n = f->gradient;
+      n.normalize();
+      Vector3d d = c - v.p;
+      d -= n.dot(d) * n;
+      Vector3d q = v.p + weight * d;
+      if (const auto pr = project_to_surface(surface, q, 4, 1e-10 * R());
+          pr && (*pr - q).norm() < 0.5 * R())
+        q = *pr;
+      next[i] = q;
+    }
+    for (std::size_t i = 0; i < verts.size(); ++i) verts[i].p = next[i];
+  }
+
+  // Collapse only if no spring at the merged particle would become longer than `limit`.
+  bool collapse_keeps_short(int a, int b, double limit) const {
+    const Vector3d m = 0.5 * (P(a) + P(b));
+    for (int v : {a, b})
+      for (int f : verts[v].faces)
+        for (int x : faces[f].v)
+          if (x != a && x != b && (P(x) - m).norm() > limit) return false;
+    return true;
+  }
+
+  // One round of isotropic remeshing towards the rest lengths: split springs longer than
+  // 4/3 R_e, collapse those shorter than 4/5 R_e, flip towards valence 6, relax tangentially.
+  int remesh_round(const ImplicitSurface& surface) {
+    int changes = 0;
+    std::vector<std::uint64_t> keys;
+    auto sorted_keys = [&] {
+      keys.clear();
+      for (const auto& [k, s] : springs) keys.push_back(k);
+      std::sort(keys.begin(), keys.end());
+    };
+    sorted_keys();
+    for (std::uint64_t k : keys) {
+      const auto it = springs.find(k);
+      if (it == springs.end() || it->second.topo || it->second.special) continue;
+      const int a = key_lo(k), b = key_hi(k);
+      if (length(a, b) > 4.0 / 3.0 * it->second.rest && try_split(a, b, surface)) ++changes;
+    }
+    sorted_keys();
+    for (std::uint64_t k : keys) {
+      const auto it = springs.find(k);
+      if (it == springs.end() || it->second.topo || it->second.special) continue;
+      const int a = key_lo(k), b = key_hi(k);
+      const double rest = it->second.rest;
+      if (length(a, b) < 0.8 * rest && collapse_keeps_short(a, b, 4.0 / 3.0 * rest) &&
+          try_collapse(a, b))
+        ++changes;
+    }
+    sorted_keys();
+    for (std::uint64_t k : keys) {
+      const auto it = springs.find(k);
+      if (it == springs.end() || it->second.topo) continue;
+      if (try_flip(key_lo(k), key_hi(k))) ++changes;
+    }
+    smooth(surface, 1.0);
+    return changes;
+  }
 
   // ---- §4.4 Step 3: ring detection (eq. 25) and the cut with two closing fans ------------
   int cut_rings(const ImplicitSurface& surface) {
@@ -848,6 +938,11 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
 int SpringNetwork::relax(const ImplicitSurface& surface) {
   Impl& m = *impl_;
   int quiet = 0, n = 0, rounds = 0;
+  // Isotropic remeshing rounds first (an addition, docs/particles.md): they bring the start
+  // mesh near the spring equilibrium in a few sweeps, which explicit Euler needs hundreds of
+  // steps for. Stop early once a round changes nothing.
+  for (int k = 0; k < m.o.remesh_rounds; ++k)
+    if (m.remesh_round(surface) == 0 && k >= 2) break;
   for (; n < m.o.max_iterations; ++n) {
     const StepReport r = step(surface);
     const bool calm =
@@ -910,13 +1005,107 @@ std::size_t SpringNetwork::vertex_count() const {
 
 int SpringNetwork::iteration() const { return impl_->iter; }
 
-ParticleMeshResult particle_mesh(const ImplicitSurface& surface, const ParticleOptions& options) {
-  const Mesh start = marching_tetrahedra(surface, options.start_spacing * options.edge_length);
-  if (start.triangles.empty())
+namespace {
+
+int component_count(const Mesh& m) {
+  std::vector<int> parent(m.positions.size());
+  for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = static_cast<int>(i);
+  auto find = [&](int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (const auto& t : m.triangles) {
+    parent[find(t[1])] = find(t[0]);
+    parent[find(t[2])] = find(t[0]);
+  }
+  std::unordered_set<int> roots;
+  for (const auto& t : m.triangles) roots.insert(find(t[0]));
+  return static_cast<int>(roots.size());
+}
+
+// 1:4 subdivision; the edge midpoints are Newton-projected onto the surface. Every new
+// vertex has valence 6, so the valence defects of the coarse mesh are all the fine mesh has.
+Mesh subdivide(const Mesh& m, const ImplicitSurface& surface) {
+  Mesh out;
+  out.positions = m.positions;
+  std::unordered_map<std::uint64_t, int> mid;
+  auto midpoint = [&](int a, int b) {
+    const std::uint64_t k = edge_key(a, b);
+    if (const auto it = mid.find(k); it != mid.end()) return it->second;
+    Vector3d p = 0.5 * (m.positions[a] + m.positions[b]);
+    const double len = (m.positions[a] - m.positions[b]).norm();
+    if (const auto q = project_to_surface(surface, p, 8); q && (*q - p).norm() < 0.5 * len) p = *q;
+    out.positions.push_back(p);
+    const int v = static_cast<int>(out.positions.size()) - 1;
+    mid.emplace(k, v);
+    return v;
+  };
+  for (const auto& t : m.triangles) {
+    const int ab = midpoint(t[0], t[1]), bc = midpoint(t[1], t[2]), ca = midpoint(t[2], t[0]);
+    out.triangles.push_back({t[0], ab, ca});
+    out.triangles.push_back({ab, t[1], bc});
+    out.triangles.push_back({ca, bc, t[2]});
+    out.triangles.push_back({ab, bc, ca});
+  }
+  return out;
+}
+
+}  // namespace
+
+SpringNetwork relaxed_network(const ImplicitSurface& surface, const ParticleOptions& options,
+                              int* iterations) {
+  const double R = options.edge_length;
+  const Mesh fine = marching_tetrahedra(surface, options.start_spacing * R);
+  if (fine.triangles.empty())
     throw InvalidInputError("particles: the surface has no zero crossing inside its bounds");
+  // Multilevel start (docs/particles.md): the coarsest level 2^k R whose marching-tetrahedra
+  // mesh has the fine one's topology (closed, same components and Euler characteristic) and
+  // enough vertices is relaxed, then subdivided 1:4 and relaxed again at half the length.
+  const TopologyStats fine_stats = topology_stats(fine);
+  const int fine_components = component_count(fine);
+  int level = 0;
+  Mesh start = fine;
+  if (fine_stats.boundary_edges == 0)
+    for (int k = options.max_levels; k >= 1; --k) {
+      const Mesh coarse = marching_tetrahedra(surface, options.start_spacing * R * (1 << k));
+      if (coarse.triangles.empty()) continue;
+      const TopologyStats cs = topology_stats(coarse);
+      if (cs.boundary_edges != 0 || cs.nonmanifold_edges != 0 ||
+          cs.euler_characteristic != fine_stats.euler_characteristic ||
+          component_count(coarse) != fine_components ||
+          coarse.vertex_count() < 40u * static_cast<std::size_t>(fine_components))
+        continue;
+      level = k;
+      start = coarse;
+      break;
+    }
+  int total = 0;
+  for (; level > 0; --level) {
+    ParticleOptions coarse = options;
+    coarse.edge_length = R * (1 << level);
+    coarse.adaptive = false;
+    SpringNetwork net(start, coarse);
+    const int it = net.relax(surface);
+    total += it;
+    const Mesh relaxed = net.mesh();
+    const TopologyStats rs = topology_stats(relaxed);
+    if (it >= coarse.max_iterations || rs.boundary_edges != 0 ||
+        rs.euler_characteristic != fine_stats.euler_characteristic ||
+        component_count(relaxed) != fine_components) {
+      start = fine;  // the coarse level did not settle: start again from the fine mesh
+      break;
+    }
+    start = subdivide(relaxed, surface);
+  }
   SpringNetwork net(start, options);
+  total += net.relax(surface);
+  if (iterations) *iterations = total;
+  return net;
+}
+
+ParticleMeshResult particle_mesh(const ImplicitSurface& surface, const ParticleOptions& options) {
   ParticleMeshResult r;
-  r.iterations = net.relax(surface);
+  const SpringNetwork net = relaxed_network(surface, options, &r.iterations);
   r.mesh = net.mesh();
   r.vertex_ids = net.vertex_ids();
   return r;

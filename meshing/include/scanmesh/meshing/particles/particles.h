@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <memory>
 #include <vector>
@@ -44,7 +45,12 @@ struct ParticleOptions {
   double convergence_tolerance = 1e-3;
   int max_iterations = 3000;    //!< relax(): iteration limit
   double start_spacing = 1.25;  //!< start triangulation grid spacing, fraction of R
-  std::uint64_t seed = 1;       //!< reserved (CLI --seed); the spring network uses no randomness
+  //! Multilevel start: relax first at up to 2^max_levels R, then subdivide 1:4 (0: off).
+  int max_levels = 1;
+  //! relax(): isotropic remeshing rounds (split/collapse/flip/tangential relaxation) before
+  //! the spring iterations.
+  int remesh_rounds = 10;
+  std::uint64_t seed = 1;  //!< reserved (CLI --seed); the spring network uses no randomness
 };
 
 //! What one iteration did.
@@ -97,7 +103,13 @@ class SpringNetwork {
 //! undefined. Vertices are on the piecewise-linear interpolant, not yet on the surface.
 Mesh marching_tetrahedra(const ImplicitSurface& surface, double spacing);
 
-//! Whole static pipeline: start triangulation at start_spacing * R, relax(), result.
+//! Start triangulation (multilevel: marching tetrahedra at a coarse level, relaxed, subdivided
+//! 1:4, relaxed again, down to R; docs/particles.md) and relax(). `iterations` (optional)
+//! receives the total spring iterations.
+SpringNetwork relaxed_network(const ImplicitSurface& surface, const ParticleOptions& options,
+                              int* iterations = nullptr);
+
+//! Whole static pipeline: relaxed_network(), result.
 struct ParticleMeshResult {
   Mesh mesh;
   std::vector<std::uint64_t> vertex_ids;
