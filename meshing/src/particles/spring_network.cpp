@@ -185,6 +185,7 @@ struct SpringNetwork::Impl {
     faces = std::move(nf);
     springs = std::move(ns);
     dead_faces = dead_verts = 0;
+    lost_steps_.clear();  // indices changed; the counters start again
   }
 
   void evaluate_all(const ImplicitSurface& s) {
@@ -422,6 +423,11 @@ struct SpringNetwork::Impl {
     return marked_now;
   }
   bool any_topo_ = false;
+  int fallback_cuts_ = 0;
+  bool converged = false;  // the last relax() met its convergence test
+  int candidate_steps_ = 0;
+  std::vector<int> lost_steps_;  // per particle: consecutive steps farther than R from F = 0  //
+                                 // consecutive steps with ring candidates but no clean ring
 
   int fast_valence(int v) const {
     return static_cast<int>(verts[v].faces.size()) + (verts[v].boundary ? 1 : 0);
@@ -539,7 +545,11 @@ struct SpringNetwork::Impl {
       for (int k = 0; k < 3; ++k) n += (q[k] = qual(t[k], t[(k + 1) % 3]) ? 1 : 0);
       if (n == 2) cand.emplace(static_cast<int>(f), q);
     }
-    if (cand.size() < 3) return 0;
+    if (cand.empty()) {
+      candidate_steps_ = 0;
+      return 0;
+    }
+    ++candidate_steps_;
     std::vector<int> order;
     for (const auto& [f, q] : cand) order.push_back(f);
     std::sort(order.begin(), order.end());
@@ -594,6 +604,11 @@ struct SpringNetwork::Impl {
       rebuild_springs();
       return cuts;
     }
+    // Patience: constriction (Step 2) usually turns the first ragged band of candidates into a
+    // clean ring within a few steps; only a band that persists is removed wholesale.
+    if (candidate_steps_ <= o.ring_patience) return 0;
+    candidate_steps_ = 0;
+    fallback_cuts_ += 1;
     // Gap: no clean ring (e.g. a twisted band of spanning triangles whose constricted feet
     // could not be collapsed further). Every candidate triangle spans the gap (its qualifying
     // edges join end points with gradients >= 90 deg apart through the outside), so remove
@@ -683,12 +698,16 @@ struct SpringNetwork::Impl {
   // closed by a fan to a new particle at the hole's centroid, as in the ring cut.
   int remove_lost_particles(const ImplicitSurface& surface) {
     std::vector<int> lost;
+    lost_steps_.resize(verts.size(), 0);
     for (std::size_t i = 0; i < verts.size(); ++i) {
       const Vertex& v = verts[i];
       if (!v.alive || v.boundary || !v.defined) continue;
       const double g = v.f.gradient.norm();
-      if (g < 1e-10 ? v.f.value > 0.0 : std::abs(v.f.value) > R() * g)
-        lost.push_back(static_cast<int>(i));
+      const bool far = g < 1e-10 ? v.f.value > 0.0 : std::abs(v.f.value) > R() * g;
+      // Patience as for the ring (§4.4 Step 3 usually removes such particles with its ring):
+      // only a particle that stays lost is removed here.
+      lost_steps_[i] = far ? lost_steps_[i] + 1 : 0;
+      if (lost_steps_[i] > o.ring_patience) lost.push_back(static_cast<int>(i));
     }
     if (lost.empty()) return 0;
     for (int v : lost) {
@@ -928,9 +947,14 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
   }
   if (o.topology_change && m.any_topo_) {
     m.evaluate_all(surface);
-    rep.cuts = m.cut_rings(surface);
+    const int before = m.fallback_cuts_;
+    const int c = m.cut_rings(surface);
+    if (m.fallback_cuts_ > before)
+      rep.fallback_cuts += c;
+    else
+      rep.cuts += c;
   }
-  if (o.topology_change && m.any_topo_ && m.remove_lost_particles(surface) > 0) ++rep.cuts;
+  if (o.topology_change && m.any_topo_ && m.remove_lost_particles(surface) > 0) ++rep.fallback_cuts;
   for (auto& [k, s] : m.springs) s.old_length = m.length(key_lo(k), key_hi(k));
   return rep;
 }
@@ -938,6 +962,7 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
 int SpringNetwork::relax(const ImplicitSurface& surface) {
   Impl& m = *impl_;
   int quiet = 0, n = 0, rounds = 0;
+  m.converged = false;
   // Isotropic remeshing rounds first (an addition, docs/particles.md): they bring the start
   // mesh near the spring equilibrium in a few sweeps, which explicit Euler needs hundreds of
   // steps for. Stop early once a round changes nothing.
@@ -957,6 +982,7 @@ int SpringNetwork::relax(const ImplicitSurface& surface) {
       continue;
     }
     ++n;
+    m.converged = true;
     break;
   }
   project(surface);
@@ -1004,6 +1030,7 @@ std::size_t SpringNetwork::vertex_count() const {
 }
 
 int SpringNetwork::iteration() const { return impl_->iter; }
+bool SpringNetwork::converged() const { return impl_->converged; }
 
 namespace {
 
@@ -1054,6 +1081,8 @@ Mesh subdivide(const Mesh& m, const ImplicitSurface& surface) {
 
 SpringNetwork relaxed_network(const ImplicitSurface& surface, const ParticleOptions& options,
                               int* iterations) {
+  // Gap decision: the multilevel start needs a closed mesh; surfaces with borders (scans)
+  // start from the fine marching-tetrahedra mesh.
   const double R = options.edge_length;
   const Mesh fine = marching_tetrahedra(surface, options.start_spacing * R);
   if (fine.triangles.empty())
@@ -1085,11 +1114,10 @@ SpringNetwork relaxed_network(const ImplicitSurface& surface, const ParticleOpti
     coarse.edge_length = R * (1 << level);
     coarse.adaptive = false;
     SpringNetwork net(start, coarse);
-    const int it = net.relax(surface);
-    total += it;
+    total += net.relax(surface);
     const Mesh relaxed = net.mesh();
     const TopologyStats rs = topology_stats(relaxed);
-    if (it >= coarse.max_iterations || rs.boundary_edges != 0 ||
+    if (!net.converged() || rs.boundary_edges != 0 ||
         rs.euler_characteristic != fine_stats.euler_characteristic ||
         component_count(relaxed) != fine_components) {
       start = fine;  // the coarse level did not settle: start again from the fine mesh
@@ -1108,6 +1136,7 @@ ParticleMeshResult particle_mesh(const ImplicitSurface& surface, const ParticleO
   const SpringNetwork net = relaxed_network(surface, options, &r.iterations);
   r.mesh = net.mesh();
   r.vertex_ids = net.vertex_ids();
+  r.converged = net.converged();
   return r;
 }
 

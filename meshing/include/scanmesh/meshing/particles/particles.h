@@ -39,7 +39,10 @@ struct ParticleOptions {
   double special_min_length = 0.5;  //!< §4.4 Step 2: special springs shorter are removed
   double epsilon1 = 0.05;           //!< eq. (25.2): shared-edge midpoint at least eps1 * R outside
   double epsilon2 = 0.0;            //!< eq. (25.3): cosine between end-point gradients below this
-  double max_step = 0.5;            //!< displacement cap per step, fraction of R (stability guard)
+  //! §4.4 Step 3: steps a band of ring candidates may persist without forming a clean ring
+  //! before the fallback removes it wholesale (gap decision 26).
+  int ring_patience = 10;
+  double max_step = 0.5;  //!< displacement cap per step, fraction of R (stability guard)
   //! relax(): converged when the largest tangential move of a step is below this times R
   //! for 10 consecutive steps with no collapse, split, flip or cut.
   double convergence_tolerance = 1e-3;
@@ -55,12 +58,16 @@ struct ParticleOptions {
 
 //! What one iteration did.
 struct StepReport {
-  int collapses = 0, splits = 0, flips = 0, special_collapses = 0, cuts = 0;
+  int collapses = 0, splits = 0, flips = 0, special_collapses = 0;
+  int cuts = 0;           //!< §4.4 ring cuts (eq. 25, two closing fans)
+  int fallback_cuts = 0;  //!< removals of lost particles / spanning bands (gap decisions 25-26)
   int new_topology_marks = 0;
   double max_tangential_move = 0.0;  //!< largest |dt * tangential velocity| (mm)
   double max_constraint = 0.0;       //!< largest |F|/|grad F| before the step (mm)
   double time_step = 0.0;
-  bool changed() const { return collapses + splits + flips + special_collapses + cuts > 0; }
+  bool changed() const {
+    return collapses + splits + flips + special_collapses + cuts + fallback_cuts > 0;
+  }
 };
 
 //! The spring network: a closed (or, on scans, bounded) manifold triangle mesh whose vertices
@@ -91,6 +98,8 @@ class SpringNetwork {
   std::vector<std::uint64_t> vertex_ids() const;
   std::size_t vertex_count() const;
   int iteration() const;
+  //! True if the last relax() met its convergence test (not stopped by max_iterations).
+  bool converged() const;
 
  private:
   struct Impl;
@@ -114,6 +123,7 @@ struct ParticleMeshResult {
   Mesh mesh;
   std::vector<std::uint64_t> vertex_ids;
   int iterations = 0;
+  bool converged = false;  //!< the final relax() met its convergence test
 };
 ParticleMeshResult particle_mesh(const ImplicitSurface& surface, const ParticleOptions& options);
 
@@ -124,7 +134,8 @@ struct AnimationFrame {
   double time = 0.0;
   Mesh mesh;
   std::vector<std::uint64_t> vertex_ids;
-  int cuts = 0;  //!< topology cuts (eq. 25) since the previous frame
+  int cuts = 0;           //!< §4.4 ring cuts (eq. 25) since the previous frame
+  int fallback_cuts = 0;  //!< fallback separations (gap decisions 25-26) since then
 };
 
 //! Frame 0 is the relaxed mesh at t0; each later frame follows the surface with
