@@ -3,6 +3,7 @@
 // docs/particles.md.
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <numbers>
 #include <unordered_map>
 #include <unordered_set>
@@ -158,6 +159,7 @@ struct SpringNetwork::Impl {
       }
     }
     springs = std::move(next);
+    keys_valid_ = false;
   }
 
   // Drops dead vertices and faces (indices change; ids do not).
@@ -184,12 +186,13 @@ struct SpringNetwork::Impl {
     verts = std::move(nv);
     faces = std::move(nf);
     springs = std::move(ns);
+    keys_valid_ = false;
     dead_faces = dead_verts = 0;
     lost_steps_.clear();  // indices changed; the counters start again
   }
 
   void evaluate_all(const ImplicitSurface& s) {
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (verts.size() > 4000)
     for (std::size_t i = 0; i < verts.size(); ++i) {
       Vertex& v = verts[i];
       if (!v.alive) continue;
@@ -237,6 +240,7 @@ struct SpringNetwork::Impl {
       verts[a].faces.push_back(f);
     }
     springs.erase(edge_key(a, b));
+    keys_valid_ = false;
     for (int x : nb) {
       if (x == a) continue;
       const auto it = springs.find(edge_key(b, x));
@@ -275,6 +279,7 @@ struct SpringNetwork::Impl {
     add_face(b, m, d);
     add_face(m, a, d);
     springs.erase(edge_key(a, b));
+    keys_valid_ = false;
     for (int x : {a, b, c, d}) springs[edge_key(m, x)] = make_spring(m, x, rest);
     for (int x : {a, b, c, d}) mark(m, x);
     mark(a, c), mark(b, c), mark(a, d), mark(b, d);
@@ -317,6 +322,7 @@ struct SpringNetwork::Impl {
     verts[c].faces.push_back(ef[1]);
     verts[d].faces.push_back(ef[0]);
     springs.erase(edge_key(a, b));
+    keys_valid_ = false;
     springs[edge_key(c, d)] = make_spring(c, d, rest);
     mark(c, d), mark(a, c), mark(b, c), mark(a, d), mark(b, d);
     return true;
@@ -423,6 +429,21 @@ struct SpringNetwork::Impl {
     return marked_now;
   }
   bool any_topo_ = false;
+  // Sorted spring keys (deterministic processing order), rebuilt only after the spring set
+  // changed: sorting every step was a quarter of the run time.
+  std::vector<std::uint64_t> keys_;
+  bool keys_valid_ = false;
+  bool last_changed_ = true;  // the previous step changed the mesh (flip pass due)
+  const std::vector<std::uint64_t>& sorted_keys() {
+    if (!keys_valid_ || keys_.size() != springs.size()) {
+      keys_.clear();
+      keys_.reserve(springs.size());
+      for (const auto& [k, s] : springs) keys_.push_back(k);
+      std::sort(keys_.begin(), keys_.end());
+      keys_valid_ = true;
+    }
+    return keys_;
+  }
   int fallback_cuts_ = 0;
   bool converged = false;  // the last relax() met its convergence test
   int candidate_steps_ = 0;
@@ -888,10 +909,7 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
   }
 
   // §4.4 Step 2: special springs that became short are removed (collapsed, Rule 1).
-  std::vector<std::uint64_t> keys;
-  keys.reserve(m.springs.size());
-  for (const auto& [k, s] : m.springs) keys.push_back(k);
-  std::sort(keys.begin(), keys.end());
+  std::vector<std::uint64_t> keys = m.sorted_keys();
   if (o.topology_change)
     for (std::uint64_t k : keys) {
       const auto it = m.springs.find(k);
@@ -917,10 +935,10 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
       if (m.try_split(a, b, surface)) ++rep.splits;
     }
   }
-  if (o.flips) {
-    keys.clear();
-    for (const auto& [k, s] : m.springs) keys.push_back(k);
-    std::sort(keys.begin(), keys.end());
+  // Flips depend on valences (and, weakly, on angles): a pass after a step that changed
+  // nothing is repeated only every 10th step.
+  if (o.flips && (m.last_changed_ || rep.changed() || m.iter % 10 == 0)) {
+    keys = m.sorted_keys();
     for (std::uint64_t k : keys) {
       const auto it = m.springs.find(k);
       if (it == m.springs.end() || m.marked(it->second) || it->second.topo) continue;
@@ -956,6 +974,7 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
   }
   if (o.topology_change && m.any_topo_ && m.remove_lost_particles(surface) > 0) ++rep.fallback_cuts;
   for (auto& [k, s] : m.springs) s.old_length = m.length(key_lo(k), key_hi(k));
+  m.last_changed_ = rep.changed();
   return rep;
 }
 
@@ -991,7 +1010,7 @@ int SpringNetwork::relax(const ImplicitSurface& surface) {
 
 void SpringNetwork::project(const ImplicitSurface& surface) {
   Impl& m = *impl_;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (m.verts.size() > 4000)
   for (std::size_t i = 0; i < m.verts.size(); ++i) {
     Vertex& v = m.verts[i];
     if (!v.alive) continue;
@@ -1124,6 +1143,27 @@ SpringNetwork relaxed_network(const ImplicitSurface& surface, const ParticleOpti
       break;
     }
     start = subdivide(relaxed, surface);
+    // The subdivided edges are chords of the coarse arcs' halves, a little longer than half
+    // the coarse rest length on a curved surface; with a fixed vertex count that stretch would
+    // stay. Correct the coarse rest length once by the measured stretch and relax again.
+    const double half = 0.5 * coarse.edge_length;
+    double sum = 0.0;
+    std::size_t count = 0;
+    for (const auto& t : start.triangles)
+      for (int k = 0; k < 3; ++k)
+        sum += (start.positions[t[k]] - start.positions[t[(k + 1) % 3]]).norm(), ++count;
+    const double stretch = sum / static_cast<double>(std::max<std::size_t>(count, 1)) / half;
+    if (std::abs(stretch - 1.0) > 0.01) {
+      coarse.edge_length /= stretch;
+      SpringNetwork again(relaxed, coarse);
+      total += again.relax(surface);
+      const Mesh second = again.mesh();
+      const TopologyStats ss = topology_stats(second);
+      if (again.converged() && ss.boundary_edges == 0 &&
+          ss.euler_characteristic == fine_stats.euler_characteristic &&
+          component_count(second) == fine_components)
+        start = subdivide(second, surface);
+    }
   }
   SpringNetwork net(start, options);
   total += net.relax(surface);
