@@ -3,7 +3,6 @@
 // docs/particles.md.
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <numbers>
 #include <unordered_map>
 #include <unordered_set>
@@ -1121,7 +1120,7 @@ SpringNetwork relaxed_network(const ImplicitSurface& surface, const ParticleOpti
       if (cs.boundary_edges != 0 || cs.nonmanifold_edges != 0 ||
           cs.euler_characteristic != fine_stats.euler_characteristic ||
           component_count(coarse) != fine_components ||
-          coarse.vertex_count() < 40u * static_cast<std::size_t>(fine_components))
+          coarse.vertex_count() < 150u * static_cast<std::size_t>(fine_components))
         continue;
       level = k;
       start = coarse;
@@ -1132,6 +1131,7 @@ SpringNetwork relaxed_network(const ImplicitSurface& surface, const ParticleOpti
     ParticleOptions coarse = options;
     coarse.edge_length = R * (1 << level);
     coarse.adaptive = false;
+    coarse.max_iterations = std::min(options.max_iterations, 600);
     SpringNetwork net(start, coarse);
     total += net.relax(surface);
     const Mesh relaxed = net.mesh();

@@ -49,7 +49,7 @@ struct ParticleOptions {
   int max_iterations = 3000;    //!< relax(): iteration limit
   double start_spacing = 1.25;  //!< start triangulation grid spacing, fraction of R
   //! Multilevel start: relax first at up to 2^max_levels R, then subdivide 1:4 (0: off).
-  int max_levels = 1;
+  int max_levels = 3;
   //! relax(): isotropic remeshing rounds (split/collapse/flip/tangential relaxation) before
   //! the spring iterations.
   int remesh_rounds = 10;
