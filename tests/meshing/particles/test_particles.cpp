@@ -70,6 +70,16 @@ TEST(SpringNetwork, SphereConvergesToUniformWellShapedClosedMesh) {
   EXPECT_EQ(r.vertex_ids.size(), m.vertex_count());
 }
 
+TEST(SpringNetwork, IsDeterministic) {
+  const auto s = surface_of(sim::make_sphere(Vector3d::Zero(), 1.0), Vector3d::Constant(-1.2),
+                            Vector3d::Constant(1.2));
+  const ParticleMeshResult a = particle_mesh(*s, {.edge_length = 0.25});
+  const ParticleMeshResult b = particle_mesh(*s, {.edge_length = 0.25});
+  EXPECT_EQ(a.mesh.positions, b.mesh.positions);
+  EXPECT_EQ(a.mesh.triangles, b.mesh.triangles);
+  EXPECT_EQ(a.vertex_ids, b.vertex_ids);
+}
+
 TEST(SpringNetwork, TorusHasEulerCharacteristicZero) {
   const double R = 0.12;
   const auto s = surface_of(sim::make_torus(Vector3d::Zero(), Vector3d::UnitZ(), 1.0, 0.4),
