@@ -907,10 +907,22 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
     v.p += move;
   }
 
+  // Candidates of Step 2 and Rules 1-2 from one sequential pass over the springs (a spring
+  // whose length an operation of this step changes is marked by it, so nothing is missed
+  // that Rule 3 would not block anyway), processed in key order.
+  std::vector<std::uint64_t> special_short, rule_candidates;
+  for (const auto& [k, s] : m.springs) {
+    const double l = m.length(key_lo(k), key_hi(k));
+    if (s.special && l < o.special_min_length * m.R()) special_short.push_back(k);
+    if (l < o.d_min * s.rest || (l > o.d_max * s.rest && !s.topo && !s.special))
+      rule_candidates.push_back(k);
+  }
+  std::sort(special_short.begin(), special_short.end());
+  std::sort(rule_candidates.begin(), rule_candidates.end());
+
   // §4.4 Step 2: special springs that became short are removed (collapsed, Rule 1).
-  std::vector<std::uint64_t> keys = m.sorted_keys();
   if (o.topology_change)
-    for (std::uint64_t k : keys) {
+    for (std::uint64_t k : special_short) {
       const auto it = m.springs.find(k);
       if (it == m.springs.end() || !it->second.special) continue;
       const int a = key_lo(k), b = key_hi(k);
@@ -920,7 +932,7 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
     }
 
   // Rules 1-4: collapse (14) / split (15) settled (16), unmarked (Rule 3) springs.
-  for (std::uint64_t k : keys) {
+  for (std::uint64_t k : rule_candidates) {
     const auto it = m.springs.find(k);
     if (it == m.springs.end()) continue;
     const Spring s = it->second;
@@ -937,7 +949,7 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
   // Flips depend on valences (and, weakly, on angles): a pass after a step that changed
   // nothing is repeated only every 10th step.
   if (o.flips && (m.last_changed_ || rep.changed() || m.iter % 10 == 0)) {
-    keys = m.sorted_keys();
+    const std::vector<std::uint64_t> keys = m.sorted_keys();
     for (std::uint64_t k : keys) {
       const auto it = m.springs.find(k);
       if (it == m.springs.end() || m.marked(it->second) || it->second.topo) continue;
@@ -1132,6 +1144,8 @@ SpringNetwork relaxed_network(const ImplicitSurface& surface, const ParticleOpti
     coarse.edge_length = R * (1 << level);
     coarse.adaptive = false;
     coarse.max_iterations = std::min(options.max_iterations, 600);
+    // A coarse level is subdivided and relaxed again: it need not settle as tightly.
+    coarse.convergence_tolerance = std::max(options.convergence_tolerance, 1e-2);
     SpringNetwork net(start, coarse);
     total += net.relax(surface);
     const Mesh relaxed = net.mesh();
