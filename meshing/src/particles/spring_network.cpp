@@ -191,7 +191,7 @@ struct SpringNetwork::Impl {
   }
 
   void evaluate_all(const ImplicitSurface& s) {
-#pragma omp parallel for schedule(static) if (verts.size() > 4000)
+#pragma omp parallel for schedule(static) if (verts.size() > 20000)
     for (std::size_t i = 0; i < verts.size(); ++i) {
       Vertex& v = verts[i];
       if (!v.alive) continue;
@@ -459,7 +459,7 @@ struct SpringNetwork::Impl {
   // Newton-projected onto F = 0.
   void smooth(const ImplicitSurface& surface, double weight) {
     std::vector<Vector3d> next(verts.size());
-#pragma omp parallel for schedule(static) if (verts.size() > 4000)
+#pragma omp parallel for schedule(static) if (verts.size() > 20000)
     for (std::size_t i = 0; i < verts.size(); ++i) {
       const Vertex& v = verts[i];
       next[i] = v.p;
@@ -1021,7 +1021,7 @@ int SpringNetwork::relax(const ImplicitSurface& surface) {
 
 void SpringNetwork::project(const ImplicitSurface& surface) {
   Impl& m = *impl_;
-#pragma omp parallel for schedule(static) if (m.verts.size() > 4000)
+#pragma omp parallel for schedule(static) if (m.verts.size() > 20000)
   for (std::size_t i = 0; i < m.verts.size(); ++i) {
     Vertex& v = m.verts[i];
     if (!v.alive) continue;
