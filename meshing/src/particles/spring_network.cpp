@@ -821,7 +821,7 @@ SpringNetwork::SpringNetwork(const Mesh& start, const ParticleOptions& options)
   m.o = options;
   const ParticleOptions& o = options;
   if (!(o.edge_length > 0.0) || !(o.rho > 0.0) || !(o.time_step_factor > 0.0) || !(o.d_min > 0.0) ||
-      !(o.d_max > 2.0 * o.d_min) || !(o.moving_epsilon >= 0.0) ||
+      !(o.d_max > 2.0 * o.d_min) || !(o.spring_stiffening >= 0.0) || !(o.moving_epsilon >= 0.0) ||
       !(o.theta >= 0.0 && o.theta <= 1.0) || !(o.lambda >= 0.0 && o.lambda < 1.0) ||
       !(o.special_factor > 0.0 && o.special_factor <= 1.0) || !(o.max_step > 0.0))
     throw InvalidInputError(
@@ -883,7 +883,12 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
     const int a = key_lo(k), b = key_hi(k);
     const Vector3d r = m.P(a) - m.P(b);
     const double l = r.norm();
-    const double sij = o.rho * (s.rest - l) / s.rest;
+    // Eq. (12) with an optional stiffening for moderate strains (an addition,
+    // docs/particles.md): S = rho x (1 + min(k x^2, 1/3)), x = (R_e - |r|) / R_e. It spreads the
+    // strain around valence defects more evenly; the cap keeps the tangent stiffness <= 2x
+    // eq. (12)'s, within the explicit Euler bound of the time step.
+    const double x = (s.rest - l) / s.rest;
+    const double sij = o.rho * x * (1.0 + std::min(o.spring_stiffening * x * x, 1.0 / 3.0));
     force[a] += sij * r;
     force[b] -= sij * r;
   }

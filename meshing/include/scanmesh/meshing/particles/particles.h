@@ -25,6 +25,9 @@ struct ParticleOptions {
   double edge_length = 1.0;  //!< R, the base rest length (mm)
   bool adaptive = false;     //!< curvature-adaptive rest lengths (§4.3)
   double rho = 1.0;          //!< spring constant rho of eq. (12); sets the time unit
+  //! Stiffening k of eq. (12) for moderate strains: S = rho x (1 + min(k x^2, 1/3)) with
+  //! x = (R_e - |r|)/R_e (an addition; 0 gives eq. 12 as printed).
+  double spring_stiffening = 10.0;
   //! Euler step (eq. 11) as a fraction of the non-oscillation bound 1 / (rho * max valence).
   double time_step_factor = 1.0;
   double d_min = 0.55;              //!< eq. (14): collapse below d_min * R_e
