@@ -618,7 +618,23 @@ struct SpringNetwork::Impl {
         cur = next;
       }
       if (broken || !closed || ring.size() < 3) continue;
-      if (cut_ring(ring, cand, surface)) ++cuts;
+      bool alive = true;
+      for (int f : ring) alive = alive && faces[f].alive;
+      if (!alive) continue;
+      if (cut_ring(ring, cand, surface)) {
+        ++cuts;
+        continue;
+      }
+      // Gap: the ring is clean (eq. 25) but its third edges do not form two simple loops
+      // (e.g. two ring triangles share a third edge where the ring wraps round a particle).
+      // Cut it all the same: remove the ring and close every hole it leaves by a fan, finding
+      // the holes from the border half-edges (pinched vertices widened, decision 27).
+      for (int f : ring) kill_face(f);
+      for (int f : ring)
+        for (int v : faces[f].v)
+          if (verts[v].alive && verts[v].faces.empty()) kill_vertex(v);
+      close_new_holes(surface);
+      ++cuts;
     }
     if (cuts) {
       rebuild_springs();
@@ -1011,7 +1027,7 @@ int SpringNetwork::relax(const ImplicitSurface& surface) {
     if (quiet < 10) continue;
     // Converged: correct a uniform compression or stretch (at most 8 rounds), else stop.
     const double s = m.mean_stretch();
-    if (std::abs(s - 1.0) > 0.03 && rounds < 8 && m.rebalance(s, surface) > 0) {
+    if (std::abs(s - 1.0) > m.o.density_tolerance && rounds < 8 && m.rebalance(s, surface) > 0) {
       ++rounds;
       quiet = 0;
       continue;
@@ -1174,6 +1190,9 @@ SpringNetwork relaxed_network(const ImplicitSurface& surface, const ParticleOpti
     const double stretch = sum / static_cast<double>(std::max<std::size_t>(count, 1)) / half;
     if (std::abs(stretch - 1.0) > 0.01) {
       coarse.edge_length /= stretch;
+      // Here the density is the point: correct the coarse count to 1 % (a coarse particle
+      // added now becomes 4^level fine ones without new valence defects at the fine level).
+      coarse.density_tolerance = std::min(options.density_tolerance, 0.01);
       SpringNetwork again(relaxed, coarse);
       total += again.relax(surface);
       const Mesh second = again.mesh();

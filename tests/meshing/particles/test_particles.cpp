@@ -196,6 +196,14 @@ TEST(Topology, FastSeparationStillGivesTwoClosedSpheres) {
 
 TEST(Topology, FinerMeshSeparatesToo) { expect_two_closed_spheres(6, 20, 0.12, true); }
 
+// Other resolutions and a medium speed (5 frames x 10 steps): still one ring cut each.
+TEST(Topology, SeparatesByOneRingCutAtSeveralResolutions) {
+  for (const double R : {0.15, 0.25, 0.3}) {
+    SCOPED_TRACE(R);
+    expect_two_closed_spheres(5, 10, R, true);
+  }
+}
+
 TEST(Animation, KeepsIdentitiesOfUnchangedVertices) {
   const auto sk = load_skeleton("blob_glide.yaml");
   const auto frames =

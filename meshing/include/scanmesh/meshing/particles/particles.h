@@ -56,6 +56,9 @@ struct ParticleOptions {
   //! relax(): isotropic remeshing rounds (split/collapse/flip/tangential relaxation) before
   //! the spring iterations.
   int remesh_rounds = 10;
+  //! relax(): after convergence, a mean stretch farther than this from 1 is corrected by
+  //! collapsing or splitting springs (docs/particles.md, decision 13).
+  double density_tolerance = 0.03;
   std::uint64_t seed = 1;  //!< reserved (CLI --seed); the spring network uses no randomness
 };
 
