@@ -385,6 +385,22 @@ struct SpringNetwork::Impl {
       const double delta = l * (std::sqrt((1.0 - cos_beta) / denom) - 1.0);  // eq. (21)
       s->rest = std::clamp(l + o.theta * delta, lo, hi);                     // (22), (23)
     }
+    // Gap decision 31: eq. (21) sets every spring on its own, so neighbouring springs can get
+    // very different rest lengths and the triangles between them turn skinny. Smooth: each
+    // particle takes the mean rest length of its springs, each spring the mean of its two
+    // particles'.
+    if (!o.adaptive_smoothing) return;
+    std::vector<double> vsum(verts.size(), 0.0);
+    std::vector<int> vcount(verts.size(), 0);
+    for (const auto& [k, s] : springs) {
+      if (s.special || s.topo) continue;
+      for (int v : {key_lo(k), key_hi(k)}) vsum[v] += s.rest, ++vcount[v];
+    }
+    for (auto& [k, s] : springs) {
+      if (s.special || s.topo) continue;
+      const int a = key_lo(k), b = key_hi(k);
+      s.rest = 0.5 * (vsum[a] / vcount[a] + vsum[b] / vcount[b]);
+    }
   }
 
   // ---- §4.4 Step 1 and 2 ------------------------------------------------------------------

@@ -24,7 +24,10 @@ namespace scanmesh::particles {
 struct ParticleOptions {
   double edge_length = 1.0;  //!< R, the base rest length (mm)
   bool adaptive = false;     //!< curvature-adaptive rest lengths (§4.3)
-  double rho = 1.0;          //!< spring constant rho of eq. (12); sets the time unit
+  //! Adaptive mode: average the eq. (21) rest lengths over each particle's springs and then
+  //! over each spring's two particles (an addition; keeps neighbouring triangles alike).
+  bool adaptive_smoothing = true;
+  double rho = 1.0;  //!< spring constant rho of eq. (12); sets the time unit
   //! Stiffening k of eq. (12) for moderate strains: S = rho x (1 + min(k x^2, 1/3)) with
   //! x = (R_e - |r|)/R_e (an addition; 0 gives eq. 12 as printed).
   double spring_stiffening = 10.0;
