@@ -1030,17 +1030,40 @@ int SpringNetwork::relax(const ImplicitSurface& surface) {
   Impl& m = *impl_;
   int quiet = 0, n = 0, rounds = 0;
   m.converged = false;
+  // A surface frozen in time cannot tear: §4.4 answers a surface that splits while it moves.
+  // On a static surface its tests fire at concave creases instead (a union of objects:
+  // neighbouring particles on two objects have gradients > 90 deg apart across the crease)
+  // and keep collapsing there, so relax() runs without topology change (restored after).
+  const bool topology_change = m.o.topology_change;
+  m.o.topology_change = false;
   // Isotropic remeshing rounds first (an addition, docs/particles.md): they bring the start
   // mesh near the spring equilibrium in a few sweeps, which explicit Euler needs hundreds of
   // steps for. Stop early once a round changes nothing.
   for (int k = 0; k < m.o.remesh_rounds; ++k)
     if (m.remesh_round(surface) == 0 && k >= 2) break;
+  // Converged: 10 steps without a mesh change in which no particle moved farther than
+  // 10 x tolerance x R in total. The net displacement (not the per-step move) is measured so a
+  // particle on a crease of F (C0, e.g. a union), whose gradient and hence tangent plane
+  // alternate between the two sides, settles into a 2-cycle that counts as converged.
+  std::vector<Vector3d> window;
   for (; n < m.o.max_iterations; ++n) {
+    if (quiet == 0) {
+      window.resize(m.verts.size());
+      for (std::size_t i = 0; i < m.verts.size(); ++i) window[i] = m.verts[i].p;
+    }
     const StepReport r = step(surface);
-    const bool calm =
-        !r.changed() && r.max_tangential_move < m.o.convergence_tolerance * m.o.edge_length;
-    quiet = calm ? quiet + 1 : 0;
-    if (quiet < 10) continue;
+    if (r.changed() || m.verts.size() != window.size()) {
+      quiet = 0;
+      continue;
+    }
+    if (++quiet < 10) continue;
+    double moved = 0.0;
+    for (std::size_t i = 0; i < m.verts.size(); ++i)
+      if (m.verts[i].alive) moved = std::max(moved, (m.verts[i].p - window[i]).norm());
+    if (moved >= 10.0 * m.o.convergence_tolerance * m.o.edge_length) {
+      quiet = 0;
+      continue;
+    }
     // Converged: correct a uniform compression or stretch (at most 8 rounds), else stop.
     const double s = m.mean_stretch();
     if (std::abs(s - 1.0) > m.o.density_tolerance && rounds < 8 && m.rebalance(s, surface) > 0) {
@@ -1052,6 +1075,7 @@ int SpringNetwork::relax(const ImplicitSurface& surface) {
     m.converged = true;
     break;
   }
+  m.o.topology_change = topology_change;
   project(surface);
   return n;
 }
