@@ -49,8 +49,8 @@ struct ParticleOptions {
   //! before the fallback removes it wholesale (gap decision 26).
   int ring_patience = 10;
   double max_step = 0.5;  //!< displacement cap per step, fraction of R (stability guard)
-  //! relax(): converged when the largest tangential move of a step is below this times R
-  //! for 10 consecutive steps with no collapse, split, flip or cut.
+  //! relax(): converged after 10 consecutive steps with no collapse, split, flip or cut in
+  //! which no particle moved farther than 10 x this x R in total (§4.4 is off in relax()).
   double convergence_tolerance = 1e-3;
   int max_iterations = 3000;    //!< relax(): iteration limit
   double start_spacing = 1.25;  //!< start triangulation grid spacing, fraction of R
