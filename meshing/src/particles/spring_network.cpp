@@ -924,6 +924,19 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
     force[a] += sij * r;
     force[b] -= sij * r;
   }
+  // Border particles (scan mode) slide along their border: the spring force is reduced to its
+  // component along the chord of the two border neighbours (decision 19).
+  std::unordered_map<int, Vector3d> border_dir;
+  for (std::size_t i = 0; i < m.verts.size(); ++i) {
+    const Vertex& v = m.verts[i];
+    if (!v.alive || !v.boundary) continue;
+    std::vector<int> ends;
+    for (int x : m.neighbors(static_cast<int>(i)))
+      if (m.edge_faces(static_cast<int>(i), x).size() == 1) ends.push_back(x);
+    if (ends.size() != 2) continue;
+    const Vector3d d = m.P(ends[1]) - m.P(ends[0]);
+    if (d.norm() > 0.0) border_dir.emplace(static_cast<int>(i), d.normalized());
+  }
   // Eq. (8) and (11): constraint velocity with feedback phi; phi * dt = 1 (one Newton step).
   const double cap = o.max_step * m.R();
   for (std::size_t i = 0; i < m.verts.size(); ++i) {
@@ -931,7 +944,10 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
     if (!v.alive || !v.defined) continue;  // Gap: a particle where F is undefined waits
     const Vector3d g = v.f.gradient;
     const double g2 = g.squaredNorm();
-    const Vector3d p_target = v.boundary ? Vector3d::Zero() : force[i];
+    Vector3d p_target = v.boundary ? Vector3d::Zero() : force[i];
+    if (v.boundary)
+      if (const auto it = border_dir.find(static_cast<int>(i)); it != border_dir.end())
+        p_target = force[i].dot(it->second) * it->second;
     Vector3d move = dt * p_target;
     if (g2 > 1e-20) {
       rep.max_constraint = std::max(rep.max_constraint, std::abs(v.f.value) / std::sqrt(g2));

@@ -276,7 +276,10 @@ TEST(ScanMode, SimulatedSphereGridGivesVerticesOnTheTrueSphere) {
   EXPECT_TRUE(r.converged) << r.iterations << " iterations";
   const Mesh& m = r.mesh;
   ASSERT_GT(m.vertex_count(), 100u);
-  EXPECT_GE(fraction_min_angle_at_least(m, 20.0), 0.9);
+  // Border particles slide along the border (decision 19), so the border triangles are
+  // relaxed too: measured 99.3% of the triangles >= 30 deg, the worst 20.5 deg.
+  EXPECT_GE(fraction_min_angle_at_least(m, 30.0), 0.95);
+  EXPECT_GE(fraction_min_angle_at_least(m, 15.0), 1.0);
   const TopologyStats st = topology_stats(m);
   EXPECT_EQ(st.nonmanifold_edges, 0u);
   EXPECT_EQ(st.boundary_loops, 2u);  // a band: open at the top and the bottom
