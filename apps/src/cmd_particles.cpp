@@ -93,27 +93,33 @@ int run_particles(const ParticlesArgs& args) {
     Mesh mesh;
     std::vector<std::uint64_t> ids;
     int iterations = 0;
+    bool converged = false;
     if (!args.grid.empty()) {
       const ScanSurface surface(read_grid(args.grid));
       const particles::ScanImplicitSurface implicit(surface);
       auto r = particles::particle_mesh(implicit, o);
       mesh = std::move(r.mesh), ids = std::move(r.vertex_ids), iterations = r.iterations;
+      converged = r.converged;
       report["mode"] = "scan";
     } else {
       const sim::Scene scene = load_scene(args.scene);
       const SceneUnionSurface surface(scene, find_bounds(scene));
       auto r = particles::particle_mesh(surface, o);
       mesh = std::move(r.mesh), ids = std::move(r.vertex_ids), iterations = r.iterations;
+      converged = r.converged;
       report["mode"] = "static";
     }
     particles::write_ply_with_ids(out / "particles.ply", mesh, ids);
     write_png(out / "particles.png", render_views(mesh));
     report["iterations"] = iterations;
+    report["converged"] = converged;
     report["mesh"] = mesh_json(mesh);
     report["seconds"] = watch.seconds();
     write_file_atomically(out / "particles.json", report.dump(2) + "\n");
     std::cout << "particles: " << mesh.vertex_count() << " vertices, " << mesh.face_count()
-              << " triangles after " << iterations << " iterations -> " << out.string() << "\n";
+              << " triangles after " << iterations << " iterations ("
+              << (converged ? "converged" : "NOT converged: iteration limit") << ") -> "
+              << out.string() << "\n";
     return 0;
   }
 
@@ -137,6 +143,7 @@ int run_particles(const ParticlesArgs& args) {
     j["file"] = name;
     j["time"] = frames[f].time;
     j["cuts"] = frames[f].cuts;
+    j["fallback_cuts"] = frames[f].fallback_cuts;
     list.push_back(j);
     // The strip shows at most 12 frames, evenly spread, all with the same camera.
     if (shown > 0 && (f * (shown - 1)) % std::max<std::size_t>(frames.size() - 1, 1) < shown - 1)

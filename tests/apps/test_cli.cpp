@@ -262,6 +262,33 @@ TEST(Cli, ParticlesMeshASphereSceneIntoAClosedMesh) {
   EXPECT_EQ(c.exit_code, 0) << c.output;
 }
 
+// Scan mode: the scan's continuous surface through its implicit view; relaxation terminates
+// and reports convergence (docs/particles.md).
+TEST(Cli, ParticlesScanModeConvergesOnASimulatedBall) {
+  const fs::path dir = scratch_dir("particles_scan");
+  std::ofstream(dir / "ball.yaml")
+      << "name: ball\nobjects:\n  - {type: sphere, center: [0, 0, 100], "
+         "radius: 60}\n";
+  std::ofstream(dir / "scanner.yaml")
+      << "n_phi: 96\nn_h: 64\nradius_mm: 300\nh0_mm: 20\ndh_mm: 2.5\n"
+         "noise_sigma_mm: 0.05\nseed: 3\n";
+  const std::string grid = (dir / "g.smg").string();
+  RunResult r = run("sim --scene " + (dir / "ball.yaml").string() + " --scanner " +
+                    (dir / "scanner.yaml").string() + " --out " + grid);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = run("clean " + grid + " --out " + (dir / "c.smg").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = run("particles --grid " + (dir / "c.smg").string() + " --edge 8 --out " +
+          (dir / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("(converged)"), std::string::npos) << r.output;
+  std::ifstream in(dir / "out" / "particles.json");
+  std::stringstream json;
+  json << in.rdbuf();
+  EXPECT_NE(json.str().find("\"converged\": true"), std::string::npos) << json.str();
+  EXPECT_NE(json.str().find("\"mode\": \"scan\""), std::string::npos) << json.str();
+}
+
 TEST(Cli, SimThenExportThenGridMeshOnASmallScanner) {
   const fs::path dir = scratch_dir("pipeline");
   std::ofstream(dir / "scanner.yaml")

@@ -17,26 +17,24 @@ std::vector<AnimationFrame> animate(const SurfaceAtTime& surface_at, double t0, 
     throw InvalidInputError("particles: need frames >= 1 and steps_per_frame >= 1");
   std::vector<AnimationFrame> out;
   const auto first = surface_at(t0);
-  const Mesh start = marching_tetrahedra(*first, options.start_spacing * options.edge_length);
-  if (start.triangles.empty())
-    throw InvalidInputError("particles: the surface has no zero crossing at the first frame");
-  SpringNetwork net(start, options);
-  net.relax(*first);
-  out.push_back({t0, net.mesh(), net.vertex_ids(), 0});
+  SpringNetwork net = relaxed_network(*first, options);
+  out.push_back({t0, net.mesh(), net.vertex_ids(), 0, 0});
   for (int f = 1; f < frames; ++f) {
     const double ta = t0 + (t1 - t0) * (f - 1) / (frames - 1);
     const double tb = t0 + (t1 - t0) * f / (frames - 1);
     const double tau = (tb - ta) / steps_per_frame;
-    int cuts = 0;
+    int cuts = 0, fallback = 0;
     std::shared_ptr<const ImplicitSurface> s;
     for (int k = 0; k < steps_per_frame; ++k) {
       // The surface at the start of the sub-step, advancing by tau during it (dF/dt in eq. 8).
       s = surface_at(ta + k * tau);
-      cuts += net.step(*s, tau).cuts;
+      const StepReport r = net.step(*s, tau);
+      cuts += r.cuts;
+      fallback += r.fallback_cuts;
     }
     s = surface_at(tb);
     net.project(*s);
-    out.push_back({tb, net.mesh(), net.vertex_ids(), cuts});
+    out.push_back({tb, net.mesh(), net.vertex_ids(), cuts, fallback});
   }
   return out;
 }

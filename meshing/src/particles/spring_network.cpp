@@ -8,6 +8,7 @@
 #include <unordered_set>
 
 #include "scanmesh/core/errors.h"
+#include "scanmesh/meshing/mesh_topology.h"
 #include "scanmesh/meshing/particles/particles.h"
 
 namespace scanmesh::particles {
@@ -157,6 +158,7 @@ struct SpringNetwork::Impl {
       }
     }
     springs = std::move(next);
+    keys_valid_ = false;
   }
 
   // Drops dead vertices and faces (indices change; ids do not).
@@ -183,11 +185,13 @@ struct SpringNetwork::Impl {
     verts = std::move(nv);
     faces = std::move(nf);
     springs = std::move(ns);
+    keys_valid_ = false;
     dead_faces = dead_verts = 0;
+    lost_steps_.clear();  // indices changed; the counters start again
   }
 
   void evaluate_all(const ImplicitSurface& s) {
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (verts.size() > 20000)
     for (std::size_t i = 0; i < verts.size(); ++i) {
       Vertex& v = verts[i];
       if (!v.alive) continue;
@@ -235,6 +239,7 @@ struct SpringNetwork::Impl {
       verts[a].faces.push_back(f);
     }
     springs.erase(edge_key(a, b));
+    keys_valid_ = false;
     for (int x : nb) {
       if (x == a) continue;
       const auto it = springs.find(edge_key(b, x));
@@ -273,6 +278,7 @@ struct SpringNetwork::Impl {
     add_face(b, m, d);
     add_face(m, a, d);
     springs.erase(edge_key(a, b));
+    keys_valid_ = false;
     for (int x : {a, b, c, d}) springs[edge_key(m, x)] = make_spring(m, x, rest);
     for (int x : {a, b, c, d}) mark(m, x);
     mark(a, c), mark(b, c), mark(a, d), mark(b, d);
@@ -288,7 +294,8 @@ struct SpringNetwork::Impl {
     const int c = opposite(ef[0], a, b), d = opposite(ef[1], a, b);
     if (c == d || springs.count(edge_key(c, d))) return false;
     auto target = [&](int v) { return verts[v].boundary ? 4 : 6; };
-    const int va = valence(a), vb = valence(b), vc = valence(c), vd = valence(d);
+    const int va = fast_valence(a), vb = fast_valence(b), vc = fast_valence(c),
+              vd = fast_valence(d);
     if (va <= 3 || vb <= 3) return false;
     auto sq = [](int x) { return x * x; };
     const int before =
@@ -314,6 +321,7 @@ struct SpringNetwork::Impl {
     verts[c].faces.push_back(ef[1]);
     verts[d].faces.push_back(ef[0]);
     springs.erase(edge_key(a, b));
+    keys_valid_ = false;
     springs[edge_key(c, d)] = make_spring(c, d, rest);
     mark(c, d), mark(a, c), mark(b, c), mark(a, d), mark(b, d);
     return true;
@@ -377,6 +385,22 @@ struct SpringNetwork::Impl {
       const double delta = l * (std::sqrt((1.0 - cos_beta) / denom) - 1.0);  // eq. (21)
       s->rest = std::clamp(l + o.theta * delta, lo, hi);                     // (22), (23)
     }
+    // Gap decision 31: eq. (21) sets every spring on its own, so neighbouring springs can get
+    // very different rest lengths and the triangles between them turn skinny. Smooth: each
+    // particle takes the mean rest length of its springs, each spring the mean of its two
+    // particles'.
+    if (!o.adaptive_smoothing) return;
+    std::vector<double> vsum(verts.size(), 0.0);
+    std::vector<int> vcount(verts.size(), 0);
+    for (const auto& [k, s] : springs) {
+      if (s.special || s.topo) continue;
+      for (int v : {key_lo(k), key_hi(k)}) vsum[v] += s.rest, ++vcount[v];
+    }
+    for (auto& [k, s] : springs) {
+      if (s.special || s.topo) continue;
+      const int a = key_lo(k), b = key_hi(k);
+      s.rest = 0.5 * (vsum[a] / vcount[a] + vsum[b] / vcount[b]);
+    }
   }
 
   // ---- §4.4 Step 1 and 2 ------------------------------------------------------------------
@@ -420,6 +444,114 @@ struct SpringNetwork::Impl {
     return marked_now;
   }
   bool any_topo_ = false;
+  // Sorted spring keys (deterministic processing order), rebuilt only after the spring set
+  // changed: sorting every step was a quarter of the run time.
+  std::vector<std::uint64_t> keys_;
+  bool keys_valid_ = false;
+  bool last_changed_ = true;  // the previous step changed the mesh (flip pass due)
+  const std::vector<std::uint64_t>& sorted_keys() {
+    if (!keys_valid_ || keys_.size() != springs.size()) {
+      keys_.clear();
+      keys_.reserve(springs.size());
+      for (const auto& [k, s] : springs) keys_.push_back(k);
+      std::sort(keys_.begin(), keys_.end());
+      keys_valid_ = true;
+    }
+    return keys_;
+  }
+  int fallback_cuts_ = 0;
+  bool converged = false;  // the last relax() met its convergence test
+  int candidate_steps_ = 0;
+  std::vector<int> lost_steps_;  // per particle: consecutive steps farther than R from F = 0  //
+                                 // consecutive steps with ring candidates but no clean ring
+
+  int fast_valence(int v) const {
+    return static_cast<int>(verts[v].faces.size()) + (verts[v].boundary ? 1 : 0);
+  }
+
+  // ---- Remeshing polish (an addition; docs/particles.md) ---------------------------------
+  // Tangential relaxation: every free particle moves towards the area-weighted centroid of
+  // its triangles' centroids (one Lloyd-like step), within the tangent plane, and is then
+  // Newton-projected onto F = 0.
+  void smooth(const ImplicitSurface& surface, double weight) {
+    std::vector<Vector3d> next(verts.size());
+#pragma omp parallel for schedule(static) if (verts.size() > 20000)
+    for (std::size_t i = 0; i < verts.size(); ++i) {
+      const Vertex& v = verts[i];
+      next[i] = v.p;
+      if (!v.alive || v.boundary || v.faces.empty()) continue;
+      Vector3d c = Vector3d::Zero(), n = Vector3d::Zero();
+      double area = 0.0;
+      for (int f : v.faces) {
+        const auto& t = faces[f].v;
+        const Vector3d nf = face_normal(t);
+        const double a = nf.norm();
+        c += a * (P(t[0]) + P(t[1]) + P(t[2])) / 3.0;
+        n += nf;
+        area += a;
+      }
+      if (!(area > 0.0)) continue;
+      c /= area;
+      const auto f = surface.evaluate(v.p);
+      if (f && f->gradient.squaredNorm() > 1e-20) n = f->gradient;
+      n.normalize();
+      Vector3d d = c - v.p;
+      d -= n.dot(d) * n;
+      Vector3d q = v.p + weight * d;
+      if (const auto pr = project_to_surface(surface, q, 4, 1e-10 * R());
+          pr && (*pr - q).norm() < 0.5 * R())
+        q = *pr;
+      next[i] = q;
+    }
+    for (std::size_t i = 0; i < verts.size(); ++i) verts[i].p = next[i];
+  }
+
+  // Collapse only if no spring at the merged particle would become longer than `limit`.
+  bool collapse_keeps_short(int a, int b, double limit) const {
+    const Vector3d m = 0.5 * (P(a) + P(b));
+    for (int v : {a, b})
+      for (int f : verts[v].faces)
+        for (int x : faces[f].v)
+          if (x != a && x != b && (P(x) - m).norm() > limit) return false;
+    return true;
+  }
+
+  // One round of isotropic remeshing towards the rest lengths: split springs longer than
+  // 4/3 R_e, collapse those shorter than 4/5 R_e, flip towards valence 6, relax tangentially.
+  int remesh_round(const ImplicitSurface& surface) {
+    int changes = 0;
+    std::vector<std::uint64_t> keys;
+    auto sorted_keys = [&] {
+      keys.clear();
+      for (const auto& [k, s] : springs) keys.push_back(k);
+      std::sort(keys.begin(), keys.end());
+    };
+    sorted_keys();
+    for (std::uint64_t k : keys) {
+      const auto it = springs.find(k);
+      if (it == springs.end() || it->second.topo || it->second.special) continue;
+      const int a = key_lo(k), b = key_hi(k);
+      if (length(a, b) > 4.0 / 3.0 * it->second.rest && try_split(a, b, surface)) ++changes;
+    }
+    sorted_keys();
+    for (std::uint64_t k : keys) {
+      const auto it = springs.find(k);
+      if (it == springs.end() || it->second.topo || it->second.special) continue;
+      const int a = key_lo(k), b = key_hi(k);
+      const double rest = it->second.rest;
+      if (length(a, b) < 0.8 * rest && collapse_keeps_short(a, b, 4.0 / 3.0 * rest) &&
+          try_collapse(a, b))
+        ++changes;
+    }
+    sorted_keys();
+    for (std::uint64_t k : keys) {
+      const auto it = springs.find(k);
+      if (it == springs.end() || it->second.topo) continue;
+      if (try_flip(key_lo(k), key_hi(k))) ++changes;
+    }
+    smooth(surface, 1.0);
+    return changes;
+  }
 
   // ---- §4.4 Step 3: ring detection (eq. 25) and the cut with two closing fans ------------
   int cut_rings(const ImplicitSurface& surface) {
@@ -449,7 +581,11 @@ struct SpringNetwork::Impl {
       for (int k = 0; k < 3; ++k) n += (q[k] = qual(t[k], t[(k + 1) % 3]) ? 1 : 0);
       if (n == 2) cand.emplace(static_cast<int>(f), q);
     }
-    if (cand.size() < 3) return 0;
+    if (cand.empty()) {
+      candidate_steps_ = 0;
+      return 0;
+    }
+    ++candidate_steps_;
     std::vector<int> order;
     for (const auto& [f, q] : cand) order.push_back(f);
     std::sort(order.begin(), order.end());
@@ -498,12 +634,33 @@ struct SpringNetwork::Impl {
         cur = next;
       }
       if (broken || !closed || ring.size() < 3) continue;
-      if (cut_ring(ring, cand, surface)) ++cuts;
+      bool alive = true;
+      for (int f : ring) alive = alive && faces[f].alive;
+      if (!alive) continue;
+      if (cut_ring(ring, cand, surface)) {
+        ++cuts;
+        continue;
+      }
+      // Gap: the ring is clean (eq. 25) but its third edges do not form two simple loops
+      // (e.g. two ring triangles share a third edge where the ring wraps round a particle).
+      // Cut it all the same: remove the ring and close every hole it leaves by a fan, finding
+      // the holes from the border half-edges (pinched vertices widened, decision 27).
+      for (int f : ring) kill_face(f);
+      for (int f : ring)
+        for (int v : faces[f].v)
+          if (verts[v].alive && verts[v].faces.empty()) kill_vertex(v);
+      close_new_holes(surface);
+      ++cuts;
     }
     if (cuts) {
       rebuild_springs();
       return cuts;
     }
+    // Patience: constriction (Step 2) usually turns the first ragged band of candidates into a
+    // clean ring within a few steps; only a band that persists is removed wholesale.
+    if (candidate_steps_ <= o.ring_patience) return 0;
+    candidate_steps_ = 0;
+    fallback_cuts_ += 1;
     // Gap: no clean ring (e.g. a twisted band of spanning triangles whose constricted feet
     // could not be collapsed further). Every candidate triangle spans the gap (its qualifying
     // edges join end points with gradients >= 90 deg apart through the outside), so remove
@@ -593,12 +750,16 @@ struct SpringNetwork::Impl {
   // closed by a fan to a new particle at the hole's centroid, as in the ring cut.
   int remove_lost_particles(const ImplicitSurface& surface) {
     std::vector<int> lost;
+    lost_steps_.resize(verts.size(), 0);
     for (std::size_t i = 0; i < verts.size(); ++i) {
       const Vertex& v = verts[i];
       if (!v.alive || v.boundary || !v.defined) continue;
       const double g = v.f.gradient.norm();
-      if (g < 1e-10 ? v.f.value > 0.0 : std::abs(v.f.value) > R() * g)
-        lost.push_back(static_cast<int>(i));
+      const bool far = g < 1e-10 ? v.f.value > 0.0 : std::abs(v.f.value) > R() * g;
+      // Patience as for the ring (§4.4 Step 3 usually removes such particles with its ring):
+      // only a particle that stays lost is removed here.
+      lost_steps_[i] = far ? lost_steps_[i] + 1 : 0;
+      if (lost_steps_[i] > o.ring_patience) lost.push_back(static_cast<int>(i));
     }
     if (lost.empty()) return 0;
     for (int v : lost) {
@@ -692,7 +853,7 @@ SpringNetwork::SpringNetwork(const Mesh& start, const ParticleOptions& options)
   m.o = options;
   const ParticleOptions& o = options;
   if (!(o.edge_length > 0.0) || !(o.rho > 0.0) || !(o.time_step_factor > 0.0) || !(o.d_min > 0.0) ||
-      !(o.d_max > 2.0 * o.d_min) || !(o.moving_epsilon >= 0.0) ||
+      !(o.d_max > 2.0 * o.d_min) || !(o.spring_stiffening >= 0.0) || !(o.moving_epsilon >= 0.0) ||
       !(o.theta >= 0.0 && o.theta <= 1.0) || !(o.lambda >= 0.0 && o.lambda < 1.0) ||
       !(o.special_factor > 0.0 && o.special_factor <= 1.0) || !(o.max_step > 0.0))
     throw InvalidInputError(
@@ -754,9 +915,27 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
     const int a = key_lo(k), b = key_hi(k);
     const Vector3d r = m.P(a) - m.P(b);
     const double l = r.norm();
-    const double sij = o.rho * (s.rest - l) / s.rest;
+    // Eq. (12) with an optional stiffening for moderate strains (an addition,
+    // docs/particles.md): S = rho x (1 + min(k x^2, 1/3)), x = (R_e - |r|) / R_e. It spreads the
+    // strain around valence defects more evenly; the cap keeps the tangent stiffness <= 2x
+    // eq. (12)'s, within the explicit Euler bound of the time step.
+    const double x = (s.rest - l) / s.rest;
+    const double sij = o.rho * x * (1.0 + std::min(o.spring_stiffening * x * x, 1.0 / 3.0));
     force[a] += sij * r;
     force[b] -= sij * r;
+  }
+  // Border particles (scan mode) slide along their border: the spring force is reduced to its
+  // component along the chord of the two border neighbours (decision 19).
+  std::unordered_map<int, Vector3d> border_dir;
+  for (std::size_t i = 0; i < m.verts.size(); ++i) {
+    const Vertex& v = m.verts[i];
+    if (!v.alive || !v.boundary) continue;
+    std::vector<int> ends;
+    for (int x : m.neighbors(static_cast<int>(i)))
+      if (m.edge_faces(static_cast<int>(i), x).size() == 1) ends.push_back(x);
+    if (ends.size() != 2) continue;
+    const Vector3d d = m.P(ends[1]) - m.P(ends[0]);
+    if (d.norm() > 0.0) border_dir.emplace(static_cast<int>(i), d.normalized());
   }
   // Eq. (8) and (11): constraint velocity with feedback phi; phi * dt = 1 (one Newton step).
   const double cap = o.max_step * m.R();
@@ -765,7 +944,10 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
     if (!v.alive || !v.defined) continue;  // Gap: a particle where F is undefined waits
     const Vector3d g = v.f.gradient;
     const double g2 = g.squaredNorm();
-    const Vector3d p_target = v.boundary ? Vector3d::Zero() : force[i];
+    Vector3d p_target = v.boundary ? Vector3d::Zero() : force[i];
+    if (v.boundary)
+      if (const auto it = border_dir.find(static_cast<int>(i)); it != border_dir.end())
+        p_target = force[i].dot(it->second) * it->second;
     Vector3d move = dt * p_target;
     if (g2 > 1e-20) {
       rep.max_constraint = std::max(rep.max_constraint, std::abs(v.f.value) / std::sqrt(g2));
@@ -778,13 +960,22 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
     v.p += move;
   }
 
+  // Candidates of Step 2 and Rules 1-2 from one sequential pass over the springs (a spring
+  // whose length an operation of this step changes is marked by it, so nothing is missed
+  // that Rule 3 would not block anyway), processed in key order.
+  std::vector<std::uint64_t> special_short, rule_candidates;
+  for (const auto& [k, s] : m.springs) {
+    const double l = m.length(key_lo(k), key_hi(k));
+    if (s.special && l < o.special_min_length * m.R()) special_short.push_back(k);
+    if (l < o.d_min * s.rest || (l > o.d_max * s.rest && !s.topo && !s.special))
+      rule_candidates.push_back(k);
+  }
+  std::sort(special_short.begin(), special_short.end());
+  std::sort(rule_candidates.begin(), rule_candidates.end());
+
   // §4.4 Step 2: special springs that became short are removed (collapsed, Rule 1).
-  std::vector<std::uint64_t> keys;
-  keys.reserve(m.springs.size());
-  for (const auto& [k, s] : m.springs) keys.push_back(k);
-  std::sort(keys.begin(), keys.end());
   if (o.topology_change)
-    for (std::uint64_t k : keys) {
+    for (std::uint64_t k : special_short) {
       const auto it = m.springs.find(k);
       if (it == m.springs.end() || !it->second.special) continue;
       const int a = key_lo(k), b = key_hi(k);
@@ -794,7 +985,7 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
     }
 
   // Rules 1-4: collapse (14) / split (15) settled (16), unmarked (Rule 3) springs.
-  for (std::uint64_t k : keys) {
+  for (std::uint64_t k : rule_candidates) {
     const auto it = m.springs.find(k);
     if (it == m.springs.end()) continue;
     const Spring s = it->second;
@@ -808,10 +999,10 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
       if (m.try_split(a, b, surface)) ++rep.splits;
     }
   }
-  if (o.flips) {
-    keys.clear();
-    for (const auto& [k, s] : m.springs) keys.push_back(k);
-    std::sort(keys.begin(), keys.end());
+  // Flips depend on valences (and, weakly, on angles): a pass after a step that changed
+  // nothing is repeated only every 10th step.
+  if (o.flips && (m.last_changed_ || rep.changed() || m.iter % 10 == 0)) {
+    const std::vector<std::uint64_t> keys = m.sorted_keys();
     for (std::uint64_t k : keys) {
       const auto it = m.springs.find(k);
       if (it == m.springs.end() || m.marked(it->second) || it->second.topo) continue;
@@ -838,39 +1029,76 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
   }
   if (o.topology_change && m.any_topo_) {
     m.evaluate_all(surface);
-    rep.cuts = m.cut_rings(surface);
+    const int before = m.fallback_cuts_;
+    const int c = m.cut_rings(surface);
+    if (m.fallback_cuts_ > before)
+      rep.fallback_cuts += c;
+    else
+      rep.cuts += c;
   }
-  if (o.topology_change && m.any_topo_ && m.remove_lost_particles(surface) > 0) ++rep.cuts;
+  if (o.topology_change && m.any_topo_ && m.remove_lost_particles(surface) > 0) ++rep.fallback_cuts;
   for (auto& [k, s] : m.springs) s.old_length = m.length(key_lo(k), key_hi(k));
+  m.last_changed_ = rep.changed();
   return rep;
 }
 
 int SpringNetwork::relax(const ImplicitSurface& surface) {
   Impl& m = *impl_;
   int quiet = 0, n = 0, rounds = 0;
+  m.converged = false;
+  // A surface frozen in time cannot tear: §4.4 answers a surface that splits while it moves.
+  // On a static surface its tests fire at concave creases instead (a union of objects:
+  // neighbouring particles on two objects have gradients > 90 deg apart across the crease)
+  // and keep collapsing there, so relax() runs without topology change (restored after).
+  const bool topology_change = m.o.topology_change;
+  m.o.topology_change = false;
+  // Isotropic remeshing rounds first (an addition, docs/particles.md): they bring the start
+  // mesh near the spring equilibrium in a few sweeps, which explicit Euler needs hundreds of
+  // steps for. Stop early once a round changes nothing.
+  for (int k = 0; k < m.o.remesh_rounds; ++k)
+    if (m.remesh_round(surface) == 0 && k >= 2) break;
+  // Converged: 10 steps without a mesh change in which no particle moved farther than
+  // 10 x tolerance x R in total. The net displacement (not the per-step move) is measured so a
+  // particle on a crease of F (C0, e.g. a union), whose gradient and hence tangent plane
+  // alternate between the two sides, settles into a 2-cycle that counts as converged.
+  std::vector<Vector3d> window;
   for (; n < m.o.max_iterations; ++n) {
+    if (quiet == 0) {
+      window.resize(m.verts.size());
+      for (std::size_t i = 0; i < m.verts.size(); ++i) window[i] = m.verts[i].p;
+    }
     const StepReport r = step(surface);
-    const bool calm =
-        !r.changed() && r.max_tangential_move < m.o.convergence_tolerance * m.o.edge_length;
-    quiet = calm ? quiet + 1 : 0;
-    if (quiet < 10) continue;
+    if (r.changed() || m.verts.size() != window.size()) {
+      quiet = 0;
+      continue;
+    }
+    if (++quiet < 10) continue;
+    double moved = 0.0;
+    for (std::size_t i = 0; i < m.verts.size(); ++i)
+      if (m.verts[i].alive) moved = std::max(moved, (m.verts[i].p - window[i]).norm());
+    if (moved >= 10.0 * m.o.convergence_tolerance * m.o.edge_length) {
+      quiet = 0;
+      continue;
+    }
     // Converged: correct a uniform compression or stretch (at most 8 rounds), else stop.
     const double s = m.mean_stretch();
-    if (std::abs(s - 1.0) > 0.03 && rounds < 8 && m.rebalance(s, surface) > 0) {
+    if (std::abs(s - 1.0) > m.o.density_tolerance && rounds < 8 && m.rebalance(s, surface) > 0) {
       ++rounds;
       quiet = 0;
       continue;
     }
     ++n;
+    m.converged = true;
     break;
   }
+  m.o.topology_change = topology_change;
   project(surface);
   return n;
 }
 
 void SpringNetwork::project(const ImplicitSurface& surface) {
   Impl& m = *impl_;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (m.verts.size() > 20000)
   for (std::size_t i = 0; i < m.verts.size(); ++i) {
     Vertex& v = m.verts[i];
     if (!v.alive) continue;
@@ -909,16 +1137,140 @@ std::size_t SpringNetwork::vertex_count() const {
 }
 
 int SpringNetwork::iteration() const { return impl_->iter; }
+bool SpringNetwork::converged() const { return impl_->converged; }
+
+namespace {
+
+int component_count(const Mesh& m) {
+  std::vector<int> parent(m.positions.size());
+  for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = static_cast<int>(i);
+  auto find = [&](int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (const auto& t : m.triangles) {
+    parent[find(t[1])] = find(t[0]);
+    parent[find(t[2])] = find(t[0]);
+  }
+  std::unordered_set<int> roots;
+  for (const auto& t : m.triangles) roots.insert(find(t[0]));
+  return static_cast<int>(roots.size());
+}
+
+// 1:4 subdivision; the edge midpoints are Newton-projected onto the surface. Every new
+// vertex has valence 6, so the valence defects of the coarse mesh are all the fine mesh has.
+Mesh subdivide(const Mesh& m, const ImplicitSurface& surface) {
+  Mesh out;
+  out.positions = m.positions;
+  std::unordered_map<std::uint64_t, int> mid;
+  auto midpoint = [&](int a, int b) {
+    const std::uint64_t k = edge_key(a, b);
+    if (const auto it = mid.find(k); it != mid.end()) return it->second;
+    Vector3d p = 0.5 * (m.positions[a] + m.positions[b]);
+    const double len = (m.positions[a] - m.positions[b]).norm();
+    if (const auto q = project_to_surface(surface, p, 8); q && (*q - p).norm() < 0.5 * len) p = *q;
+    out.positions.push_back(p);
+    const int v = static_cast<int>(out.positions.size()) - 1;
+    mid.emplace(k, v);
+    return v;
+  };
+  for (const auto& t : m.triangles) {
+    const int ab = midpoint(t[0], t[1]), bc = midpoint(t[1], t[2]), ca = midpoint(t[2], t[0]);
+    out.triangles.push_back({t[0], ab, ca});
+    out.triangles.push_back({ab, t[1], bc});
+    out.triangles.push_back({ca, bc, t[2]});
+    out.triangles.push_back({ab, bc, ca});
+  }
+  return out;
+}
+
+}  // namespace
+
+SpringNetwork relaxed_network(const ImplicitSurface& surface, const ParticleOptions& options,
+                              int* iterations) {
+  // Gap decision: the multilevel start needs a closed mesh; surfaces with borders (scans)
+  // start from the fine marching-tetrahedra mesh.
+  const double R = options.edge_length;
+  const Mesh fine = marching_tetrahedra(surface, options.start_spacing * R);
+  if (fine.triangles.empty())
+    throw InvalidInputError("particles: the surface has no zero crossing inside its bounds");
+  // Multilevel start (docs/particles.md): the coarsest level 2^k R whose marching-tetrahedra
+  // mesh has the fine one's topology (closed, same components and Euler characteristic) and
+  // enough vertices is relaxed, then subdivided 1:4 and relaxed again at half the length.
+  const TopologyStats fine_stats = topology_stats(fine);
+  const int fine_components = component_count(fine);
+  int level = 0;
+  Mesh start = fine;
+  if (fine_stats.boundary_edges == 0)
+    for (int k = options.max_levels; k >= 1; --k) {
+      const Mesh coarse = marching_tetrahedra(surface, options.start_spacing * R * (1 << k));
+      if (coarse.triangles.empty()) continue;
+      const TopologyStats cs = topology_stats(coarse);
+      if (cs.boundary_edges != 0 || cs.nonmanifold_edges != 0 ||
+          cs.euler_characteristic != fine_stats.euler_characteristic ||
+          component_count(coarse) != fine_components ||
+          coarse.vertex_count() < 150u * static_cast<std::size_t>(fine_components))
+        continue;
+      level = k;
+      start = coarse;
+      break;
+    }
+  int total = 0;
+  for (; level > 0; --level) {
+    ParticleOptions coarse = options;
+    coarse.edge_length = R * (1 << level);
+    coarse.adaptive = false;
+    coarse.max_iterations = std::min(options.max_iterations, 600);
+    // A coarse level is subdivided and relaxed again: it need not settle as tightly.
+    coarse.convergence_tolerance = std::max(options.convergence_tolerance, 1e-2);
+    SpringNetwork net(start, coarse);
+    total += net.relax(surface);
+    const Mesh relaxed = net.mesh();
+    const TopologyStats rs = topology_stats(relaxed);
+    if (!net.converged() || rs.boundary_edges != 0 ||
+        rs.euler_characteristic != fine_stats.euler_characteristic ||
+        component_count(relaxed) != fine_components) {
+      start = fine;  // the coarse level did not settle: start again from the fine mesh
+      break;
+    }
+    start = subdivide(relaxed, surface);
+    // The subdivided edges are chords of the coarse arcs' halves, a little longer than half
+    // the coarse rest length on a curved surface; with a fixed vertex count that stretch would
+    // stay. Correct the coarse rest length once by the measured stretch and relax again.
+    const double half = 0.5 * coarse.edge_length;
+    double sum = 0.0;
+    std::size_t count = 0;
+    for (const auto& t : start.triangles)
+      for (int k = 0; k < 3; ++k)
+        sum += (start.positions[t[k]] - start.positions[t[(k + 1) % 3]]).norm(), ++count;
+    const double stretch = sum / static_cast<double>(std::max<std::size_t>(count, 1)) / half;
+    if (std::abs(stretch - 1.0) > 0.01) {
+      coarse.edge_length /= stretch;
+      // Here the density is the point: correct the coarse count to 1 % (a coarse particle
+      // added now becomes 4^level fine ones without new valence defects at the fine level).
+      coarse.density_tolerance = std::min(options.density_tolerance, 0.01);
+      SpringNetwork again(relaxed, coarse);
+      total += again.relax(surface);
+      const Mesh second = again.mesh();
+      const TopologyStats ss = topology_stats(second);
+      if (again.converged() && ss.boundary_edges == 0 &&
+          ss.euler_characteristic == fine_stats.euler_characteristic &&
+          component_count(second) == fine_components)
+        start = subdivide(second, surface);
+    }
+  }
+  SpringNetwork net(start, options);
+  total += net.relax(surface);
+  if (iterations) *iterations = total;
+  return net;
+}
 
 ParticleMeshResult particle_mesh(const ImplicitSurface& surface, const ParticleOptions& options) {
-  const Mesh start = marching_tetrahedra(surface, options.start_spacing * options.edge_length);
-  if (start.triangles.empty())
-    throw InvalidInputError("particles: the surface has no zero crossing inside its bounds");
-  SpringNetwork net(start, options);
   ParticleMeshResult r;
-  r.iterations = net.relax(surface);
+  const SpringNetwork net = relaxed_network(surface, options, &r.iterations);
   r.mesh = net.mesh();
   r.vertex_ids = net.vertex_ids();
+  r.converged = net.converged();
   return r;
 }
 

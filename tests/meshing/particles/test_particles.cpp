@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <set>
 #include <unordered_map>
@@ -58,16 +59,46 @@ TEST(SpringNetwork, SphereConvergesToUniformWellShapedClosedMesh) {
     mean += l / static_cast<double>(lengths.size());
   }
   EXPECT_NEAR(mean, R, 0.05 * R);
-  // Issue 7 asks for "edge lengths within +-15% of R". Reached for ~90% of the edges: the
-  // 5-7 valence dislocations a closed spring network keeps stretch or squeeze their springs
-  // (docs/particles.md, "Limitations"); 99% are within +-25%.
+  // Issue 7 asks for "edge lengths within +-15% of R". Measured: 99.2% of the edges (the
+  // rest are spokes of the remaining 5/7 valence defects, docs/particles.md); asserted:
+  // >= 99%, and every edge within +-25%.
   const double frac = static_cast<double>(within) / static_cast<double>(lengths.size());
-  EXPECT_GE(frac, 0.88);
-  std::size_t within25 = 0;
-  for (double l : lengths) within25 += std::abs(l - R) <= 0.25 * R ? 1 : 0;
-  EXPECT_GE(static_cast<double>(within25) / static_cast<double>(lengths.size()), 0.99);
-  EXPECT_GE(fraction_min_angle_at_least(m, 30.0), 0.95);
+  EXPECT_GE(frac, 0.99);
+  for (double l : lengths) EXPECT_LE(std::abs(l - R), 0.25 * R);
+  // Issue 7: min angle >= 30 deg for >= 95% of the triangles; here every triangle has it.
+  EXPECT_GE(fraction_min_angle_at_least(m, 30.0), 1.0);
+  EXPECT_TRUE(r.converged);
   EXPECT_EQ(r.vertex_ids.size(), m.vertex_count());
+}
+
+TEST(SpringNetwork, IsDeterministic) {
+  const auto s = surface_of(sim::make_sphere(Vector3d::Zero(), 1.0), Vector3d::Constant(-1.2),
+                            Vector3d::Constant(1.2));
+  const ParticleMeshResult a = particle_mesh(*s, {.edge_length = 0.25});
+  const ParticleMeshResult b = particle_mesh(*s, {.edge_length = 0.25});
+  EXPECT_EQ(a.mesh.positions, b.mesh.positions);
+  EXPECT_EQ(a.mesh.triangles, b.mesh.triangles);
+  EXPECT_EQ(a.vertex_ids, b.vertex_ids);
+}
+
+// The union (min) of two overlapping spheres has a concave crease. Static relaxation must not
+// take the crease for a tear (§4.4 is off in relax()) and must converge.
+TEST(SpringNetwork, UnionWithACreaseConvergesClosed) {
+  class Union final : public ImplicitSurface {
+   public:
+    std::optional<ImplicitValue> evaluate(const Vector3d& x) const override {
+      const Vector3d a = x - Vector3d(-0.6, 0, 0), b = x - Vector3d(0.6, 0, 0);
+      const Vector3d& d = a.norm() < b.norm() ? a : b;
+      return ImplicitValue{.value = d.norm() - 1.0, .gradient = d.normalized()};
+    }
+    Eigen::AlignedBox3d bounds() const override {
+      return {Vector3d(-1.7, -1.1, -1.1), Vector3d(1.7, 1.1, 1.1)};
+    }
+  };
+  const ParticleMeshResult r = particle_mesh(Union(), {.edge_length = 0.2});
+  EXPECT_TRUE(r.converged) << r.iterations << " iterations";
+  expect_closed_manifold(r.mesh, 2);
+  EXPECT_GE(fraction_min_angle_at_least(r.mesh, 30.0), 0.9);
 }
 
 TEST(SpringNetwork, TorusHasEulerCharacteristicZero) {
@@ -90,6 +121,8 @@ TEST(SpringNetwork, AdaptiveEdgesAreShorterWhereCurvatureIsHigher) {
   auto correlation = [&](bool adaptive) {
     const Mesh m = particle_mesh(*s, {.edge_length = R, .adaptive = adaptive}).mesh;
     expect_closed_manifold(m, 2);
+    // Smoothed adaptive rest lengths keep the triangles well shaped too (decision 31).
+    EXPECT_GE(fraction_min_angle_at_least(m, 30.0), 0.95) << "adaptive " << adaptive;
     std::vector<double> len, curv;
     for (const auto& t : m.triangles)
       for (int k = 0; k < 3; ++k) {
@@ -103,6 +136,8 @@ TEST(SpringNetwork, AdaptiveEdgesAreShorterWhereCurvatureIsHigher) {
   const double adaptive = correlation(true);
   const double uniform = correlation(false);
   EXPECT_LT(adaptive, -0.5) << "uniform mode gives " << uniform;
+  std::printf("correlation edge length / curvature: adaptive %.3f, uniform %.3f\n", adaptive,
+              uniform);
   EXPECT_LT(adaptive, uniform - 0.3);
 }
 
@@ -137,18 +172,29 @@ void expect_two_closed_spheres(int frame_count, int steps, double R, bool midpoi
   ASSERT_EQ(face_components(frames.front().mesh, comp), 1);
   expect_closed_manifold(frames.front().mesh, 2);
   const Mesh& last = frames.back().mesh;
-  int cuts = 0;
-  for (const auto& f : frames) cuts += f.cuts;
-  EXPECT_GE(cuts, 1);
+  // The separation is done by the ring cut of §4.4 (eq. 25, two closing fans), not by the
+  // fallbacks (gap decisions 25-26).
+  int cuts = 0, fallback = 0;
+  for (const auto& f : frames) cuts += f.cuts, fallback += f.fallback_cuts;
+  EXPECT_EQ(cuts, 1);
+  EXPECT_EQ(fallback, 0);
   ASSERT_EQ(face_components(last, comp), 2);
+  // No lost or duplicated faces: closed components (below) and no vertex triple twice.
+  std::set<std::array<int, 3>> seen;
+  for (auto t : last.triangles) {
+    std::sort(t.begin(), t.end());
+    EXPECT_TRUE(seen.insert(t).second) << "duplicated face";
+  }
   const auto final_surface = surface_at(sk)(sk->end_time());
   for (int c = 0; c < 2; ++c) {
     const Mesh part = component_mesh(last, comp, c);
     expect_closed_manifold(part, 2);
-    // Each part lies on one side of the gap: all vertices on the same side of x = 0.
+    // Each part lies on one side of the gap: all vertices on the same side of x = 0 (with a
+    // margin once the closing fans have had steps to relax onto the surface).
+    const double margin = midpoints_on_surface ? 0.3 : 0.0;
     double lo = 1e9, hi = -1e9;
     for (const auto& p : part.positions) lo = std::min(lo, p.x()), hi = std::max(hi, p.x());
-    EXPECT_TRUE(lo > 0.3 || hi < -0.3) << "component spans x in [" << lo << ", " << hi << "]";
+    EXPECT_TRUE(lo > margin || hi < -margin) << "component spans x in [" << lo << ", " << hi << "]";
   }
   // No triangle spans the gap (each component lies on one side, above). With enough steps
   // after the cut the closing fans have also relaxed onto the surface: every edge midpoint is
@@ -167,13 +213,21 @@ TEST(Topology, TwoBlobsPulledApartEndAsTwoClosedSpheres) {
   expect_two_closed_spheres(9, 30, 0.2, true);
 }
 
-// Few steps per frame: the neck tears within one frame, so the cut has to cope with a twisted
-// band of spanning triangles and particles left in the gap (docs/particles.md, decisions 25-27).
+// Few steps per frame: the neck tears within one frame; the ring still forms after a few steps
+// of constriction (ring_patience) and is cut cleanly.
 TEST(Topology, FastSeparationStillGivesTwoClosedSpheres) {
   expect_two_closed_spheres(3, 5, 0.2, false);
 }
 
 TEST(Topology, FinerMeshSeparatesToo) { expect_two_closed_spheres(6, 20, 0.12, true); }
+
+// Other resolutions and a medium speed (5 frames x 10 steps): still one ring cut each.
+TEST(Topology, SeparatesByOneRingCutAtSeveralResolutions) {
+  for (const double R : {0.15, 0.25, 0.3}) {
+    SCOPED_TRACE(R);
+    expect_two_closed_spheres(5, 10, R, true);
+  }
+}
 
 TEST(Animation, KeepsIdentitiesOfUnchangedVertices) {
   const auto sk = load_skeleton("blob_glide.yaml");
@@ -194,6 +248,9 @@ TEST(Animation, KeepsIdentitiesOfUnchangedVertices) {
       EXPECT_LT((frames[f].mesh.positions[i] - it->second).norm(), 0.5);
     }
     EXPECT_GE(static_cast<double>(kept) / static_cast<double>(before.size()), 0.9);
+    // The blob glides without tearing: no cut of any kind.
+    EXPECT_EQ(frames[f].cuts, 0);
+    EXPECT_EQ(frames[f].fallback_cuts, 0);
   }
   // The per-frame PLY keeps the ids.
   const auto dir = std::filesystem::path(SCANMESH_BINARY_DIR) / "test_particles_out";
@@ -215,10 +272,14 @@ TEST(ScanMode, SimulatedSphereGridGivesVerticesOnTheTrueSphere) {
   const ScanSurface surface(scan.grid);
   const ScanImplicitSurface implicit(surface);
   const double R = 8.0;
-  // Scan mode rarely meets the convergence test (docs/particles.md, "Limitations"): cap it.
-  const Mesh m = particle_mesh(implicit, {.edge_length = R, .max_iterations = 400}).mesh;
+  const ParticleMeshResult r = particle_mesh(implicit, {.edge_length = R});
+  EXPECT_TRUE(r.converged) << r.iterations << " iterations";
+  const Mesh& m = r.mesh;
   ASSERT_GT(m.vertex_count(), 100u);
-  EXPECT_GE(fraction_min_angle_at_least(m, 20.0), 0.9);
+  // Border particles slide along the border (decision 19), so the border triangles are
+  // relaxed too: measured 99.3% of the triangles >= 30 deg, the worst 20.5 deg.
+  EXPECT_GE(fraction_min_angle_at_least(m, 30.0), 0.95);
+  EXPECT_GE(fraction_min_angle_at_least(m, 15.0), 1.0);
   const TopologyStats st = topology_stats(m);
   EXPECT_EQ(st.nonmanifold_edges, 0u);
   EXPECT_EQ(st.boundary_loops, 2u);  // a band: open at the top and the bottom

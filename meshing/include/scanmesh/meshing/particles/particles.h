@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <memory>
 #include <vector>
@@ -23,7 +24,13 @@ namespace scanmesh::particles {
 struct ParticleOptions {
   double edge_length = 1.0;  //!< R, the base rest length (mm)
   bool adaptive = false;     //!< curvature-adaptive rest lengths (§4.3)
-  double rho = 1.0;          //!< spring constant rho of eq. (12); sets the time unit
+  //! Adaptive mode: average the eq. (21) rest lengths over each particle's springs and then
+  //! over each spring's two particles (an addition; keeps neighbouring triangles alike).
+  bool adaptive_smoothing = true;
+  double rho = 1.0;  //!< spring constant rho of eq. (12); sets the time unit
+  //! Stiffening k of eq. (12) for moderate strains: S = rho x (1 + min(k x^2, 1/3)) with
+  //! x = (R_e - |r|)/R_e (an addition; 0 gives eq. 12 as printed).
+  double spring_stiffening = 10.0;
   //! Euler step (eq. 11) as a fraction of the non-oscillation bound 1 / (rho * max valence).
   double time_step_factor = 1.0;
   double d_min = 0.55;              //!< eq. (14): collapse below d_min * R_e
@@ -38,23 +45,38 @@ struct ParticleOptions {
   double special_min_length = 0.5;  //!< §4.4 Step 2: special springs shorter are removed
   double epsilon1 = 0.05;           //!< eq. (25.2): shared-edge midpoint at least eps1 * R outside
   double epsilon2 = 0.0;            //!< eq. (25.3): cosine between end-point gradients below this
-  double max_step = 0.5;            //!< displacement cap per step, fraction of R (stability guard)
-  //! relax(): converged when the largest tangential move of a step is below this times R
-  //! for 10 consecutive steps with no collapse, split, flip or cut.
+  //! §4.4 Step 3: steps a band of ring candidates may persist without forming a clean ring
+  //! before the fallback removes it wholesale (gap decision 26).
+  int ring_patience = 10;
+  double max_step = 0.5;  //!< displacement cap per step, fraction of R (stability guard)
+  //! relax(): converged after 10 consecutive steps with no collapse, split, flip or cut in
+  //! which no particle moved farther than 10 x this x R in total (§4.4 is off in relax()).
   double convergence_tolerance = 1e-3;
   int max_iterations = 3000;    //!< relax(): iteration limit
   double start_spacing = 1.25;  //!< start triangulation grid spacing, fraction of R
-  std::uint64_t seed = 1;       //!< reserved (CLI --seed); the spring network uses no randomness
+  //! Multilevel start: relax first at up to 2^max_levels R, then subdivide 1:4 (0: off).
+  int max_levels = 3;
+  //! relax(): isotropic remeshing rounds (split/collapse/flip/tangential relaxation) before
+  //! the spring iterations.
+  int remesh_rounds = 10;
+  //! relax(): after convergence, a mean stretch farther than this from 1 is corrected by
+  //! collapsing or splitting springs (docs/particles.md, decision 13).
+  double density_tolerance = 0.03;
+  std::uint64_t seed = 1;  //!< reserved (CLI --seed); the spring network uses no randomness
 };
 
 //! What one iteration did.
 struct StepReport {
-  int collapses = 0, splits = 0, flips = 0, special_collapses = 0, cuts = 0;
+  int collapses = 0, splits = 0, flips = 0, special_collapses = 0;
+  int cuts = 0;           //!< §4.4 ring cuts (eq. 25, two closing fans)
+  int fallback_cuts = 0;  //!< removals of lost particles / spanning bands (gap decisions 25-26)
   int new_topology_marks = 0;
   double max_tangential_move = 0.0;  //!< largest |dt * tangential velocity| (mm)
   double max_constraint = 0.0;       //!< largest |F|/|grad F| before the step (mm)
   double time_step = 0.0;
-  bool changed() const { return collapses + splits + flips + special_collapses + cuts > 0; }
+  bool changed() const {
+    return collapses + splits + flips + special_collapses + cuts + fallback_cuts > 0;
+  }
 };
 
 //! The spring network: a closed (or, on scans, bounded) manifold triangle mesh whose vertices
@@ -85,6 +107,8 @@ class SpringNetwork {
   std::vector<std::uint64_t> vertex_ids() const;
   std::size_t vertex_count() const;
   int iteration() const;
+  //! True if the last relax() met its convergence test (not stopped by max_iterations).
+  bool converged() const;
 
  private:
   struct Impl;
@@ -97,11 +121,18 @@ class SpringNetwork {
 //! undefined. Vertices are on the piecewise-linear interpolant, not yet on the surface.
 Mesh marching_tetrahedra(const ImplicitSurface& surface, double spacing);
 
-//! Whole static pipeline: start triangulation at start_spacing * R, relax(), result.
+//! Start triangulation (multilevel: marching tetrahedra at a coarse level, relaxed, subdivided
+//! 1:4, relaxed again, down to R; docs/particles.md) and relax(). `iterations` (optional)
+//! receives the total spring iterations.
+SpringNetwork relaxed_network(const ImplicitSurface& surface, const ParticleOptions& options,
+                              int* iterations = nullptr);
+
+//! Whole static pipeline: relaxed_network(), result.
 struct ParticleMeshResult {
   Mesh mesh;
   std::vector<std::uint64_t> vertex_ids;
   int iterations = 0;
+  bool converged = false;  //!< the final relax() met its convergence test
 };
 ParticleMeshResult particle_mesh(const ImplicitSurface& surface, const ParticleOptions& options);
 
@@ -112,7 +143,8 @@ struct AnimationFrame {
   double time = 0.0;
   Mesh mesh;
   std::vector<std::uint64_t> vertex_ids;
-  int cuts = 0;  //!< topology cuts (eq. 25) since the previous frame
+  int cuts = 0;           //!< §4.4 ring cuts (eq. 25) since the previous frame
+  int fallback_cuts = 0;  //!< fallback separations (gap decisions 25-26) since then
 };
 
 //! Frame 0 is the relaxed mesh at t0; each later frame follows the surface with
