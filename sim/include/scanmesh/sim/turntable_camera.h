@@ -61,11 +61,11 @@ struct RigConfig {
   double camera_roll_rad = 0.0;
   std::vector<LaserConfig> lasers;
   double line_sigma_mm = 0.35;     //!< Gaussian sigma of the laser sheet across its plane
-  double laser_power = 600.0;      //!< DN added on a white surface lit head-on at the line centre
+  double laser_power = 350.0;      //!< DN added on a white surface lit head-on at the line centre
   double ambient = 0.6;            //!< laser-off brightness of a white surface facing the camera
   double noise_sigma = 1.5;        //!< sensor read noise (DN)
   double shot_noise_gain = 0.02;   //!< shot-noise variance per DN of signal
-  double speckle_contrast = 0.08;  //!< relative std. dev. of the laser intensity per pixel
+  double speckle_contrast = 0.05;  //!< relative std. dev. of the laser intensity per pixel
   double bloom_fraction = 0.15;    //!< share of the light above saturation spilled around
   double bloom_radius_px = 1.5;    //!< e-folding distance of the spill
   bool platform = true;            //!< render the platter (a disc)
