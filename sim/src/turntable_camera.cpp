@@ -344,6 +344,7 @@ void TurntableCamera::set_pattern(std::optional<ChessboardPattern> pattern) {
           "chessboard needs at least 2 x 2 corners and a positive square size");
   }
   pattern_ = std::move(pattern);
+  if (pattern_) board_from_object_ = pattern_->pose.inverse();
   const std::lock_guard lock(cache_mutex_);
   cache_.reset();
 }
@@ -373,7 +374,7 @@ std::optional<TurntableCamera::SurfaceHit> TurntableCamera::cast(const Vector3d&
     if (std::abs(den) > 1e-12) {
       const double t = nb.dot(pt.pose.translation() - o) / den;
       if (t > 1e-9) {
-        const Vector3d q = pt.pose.inverse() * (o + t * d);
+        const Vector3d q = board_from_object_ * (o + t * d);
         const double s = pt.square_mm, m = pt.margin_mm;
         if (q.x() >= -s - m && q.x() <= pt.corner_cols * s + m && q.y() >= -s - m &&
             q.y() <= pt.corner_rows * s + m) {
@@ -475,7 +476,21 @@ std::shared_ptr<const TurntableCamera::HitBuffer> TurntableCamera::hits(double a
       const auto h = cast(c, dir, angle);
       if (!h) continue;
       Vector3d albedo = h->albedo;
+      bool near_edge = false;
       if (h->kind == kBoardHit && pattern_) {
+        // Only pixels whose footprint may hold a printed edge need the box filter.
+        const Vector3d q = board_from_object_ * (rot_z(-angle) * h->p_rig);
+        const double s = pattern_->square_mm, m = pattern_->margin_mm;
+        const double footprint = 3.0 * h->t / std::min(rig_.intrinsics.fx, rig_.intrinsics.fy);
+        auto near = [&](double v, double lo, double hi) {
+          const double g = std::abs(std::remainder(v, s));
+          return g < footprint || std::abs(v - (lo - m)) < footprint ||
+                 std::abs(v - (hi + m)) < footprint;
+        };
+        near_edge = near(q.x(), -s, pattern_->corner_cols * s) ||
+                    near(q.y(), -s, pattern_->corner_rows * s);
+      }
+      if (near_edge) {
         // Box-filter the printed squares over the pixel (3 x 3 samples).
         albedo.setZero();
         for (int sy = -1; sy <= 1; ++sy)
@@ -675,6 +690,61 @@ std::vector<std::optional<Vector2d>> TurntableCamera::pattern_corner_truth(doubl
       out[static_cast<std::size_t>(r) * pt.corner_cols + c] = *uv;
     }
   return out;
+}
+
+std::vector<CalibrationShot> render_calibration_shots(TurntableCamera& camera,
+                                                      const CalibrationPlan& plan) {
+  const auto saved = camera.pattern();
+  const double ph = camera.rig().platform_height_mm;
+  std::vector<CalibrationShot> shots;
+  // The plan's board standing upright on the platter (same orientation as upright()).
+  ChessboardPattern up = plan.board;
+  up.pose = ChessboardPattern::upright(ph).pose;
+  up.pose.translation() =
+      Vector3d(plan.platter_offset_mm, -0.5 * (up.corner_cols - 1) * up.square_mm,
+               ph + plan.platter_bottom_mm + (up.corner_rows - 1) * up.square_mm);
+  // Hand-held: the board tilted about its centre by up to ~30 degrees, moved toward the camera.
+  const Vector3d centre_board(0.5 * (up.corner_cols - 1) * up.square_mm,
+                              0.5 * (up.corner_rows - 1) * up.square_mm, 0.0);
+  for (int i = 0; i < plan.handheld_views; ++i) {
+    // Spread over the image and over tilts up to ~35 degrees (golden-angle sequence).
+    const double a = 2.399963 * i;
+    const double f = (i + 0.5) / std::max(1, plan.handheld_views);
+    const double tilt = 35.0 * kDeg * std::sqrt(f);
+    const double tilt_x = tilt * std::cos(a), tilt_y = tilt * std::sin(a);
+    const double roll = 10.0 * kDeg * std::sin(3.0 * a);
+    ChessboardPattern p = up;
+    const Eigen::Matrix3d r =
+        (Eigen::AngleAxisd(tilt_x, Vector3d::UnitX()) *
+         Eigen::AngleAxisd(tilt_y, Vector3d::UnitY()) * Eigen::AngleAxisd(roll, Vector3d::UnitZ()))
+            .toRotationMatrix();
+    const Vector3d centre_obj = up.pose * centre_board;
+    const Vector3d moved =
+        centre_obj + Vector3d(40.0 + 50.0 * std::sin(1.7 * a), 70.0 * std::cos(1.3 * a) * f,
+                              45.0 + 45.0 * std::sin(2.1 * a) * f);
+    p.pose.linear() = up.pose.linear() * r;
+    p.pose.translation() = moved - p.pose.linear() * centre_board;
+    camera.set_pattern(p);
+    CalibrationShot s;
+    s.image = camera.render(0.0, 0u);
+    s.pattern = p;
+    shots.push_back(std::move(s));
+  }
+  std::vector<double> angles = plan.platter_angles_rad;
+  if (angles.empty())
+    for (int d = -70; d <= 70; d += 10) angles.push_back(d * kDeg);
+  camera.set_pattern(up);
+  for (double a : angles) {
+    CalibrationShot s;
+    s.on_turntable = true;
+    s.angle_rad = a;
+    s.image = camera.render(a, 0u);
+    for (int k = 0; k < camera.laser_count(); ++k) s.laser_on.push_back(camera.render(a, 1u << k));
+    s.pattern = up;
+    shots.push_back(std::move(s));
+  }
+  camera.set_pattern(saved);
+  return shots;
 }
 
 }  // namespace scanmesh::sim

@@ -168,10 +168,32 @@ class TurntableCamera {
   const Scene& scene_;
   RigConfig rig_;
   std::optional<ChessboardPattern> pattern_;
+  Eigen::Isometry3d board_from_object_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d camera_from_rig_;
   std::vector<Eigen::Vector2f> normalized_;  // per pixel, undistorted normalised coordinates
   mutable std::mutex cache_mutex_;
   mutable std::shared_ptr<const HitBuffer> cache_;
 };
+
+//! A calibration session for the simulated rig: hand-held board poses (tilted views in front of
+//! the camera, for the intrinsics) and the board standing upright on the platter, off the axis,
+//! at several turntable angles with each laser's frame (for the laser planes and the axis).
+struct CalibrationPlan {
+  ChessboardPattern board;          //!< size, squares, albedo; the pose is set per shot
+  double platter_bottom_mm = 25.0;  //!< lowest corner row above the platter top
+  double platter_offset_mm = 30.0;  //!< board plane this far off the axis (toward the camera)
+  std::vector<double> platter_angles_rad;  //!< empty: -70..70 degrees every 10 degrees
+  int handheld_views = 16;
+};
+struct CalibrationShot {
+  Image8 image;  //!< lasers off
+  bool on_turntable = false;
+  double angle_rad = 0;
+  std::vector<Image8> laser_on;  //!< platter shots: laser k alone
+  ChessboardPattern pattern;     //!< the exact board pose of the shot (object frame)
+};
+//! Renders the plan's shots (restores the camera's pattern mode afterwards). Deterministic.
+std::vector<CalibrationShot> render_calibration_shots(TurntableCamera& camera,
+                                                      const CalibrationPlan& plan = {});
 
 }  // namespace scanmesh::sim
