@@ -75,10 +75,10 @@ TEST_F(CalibrationSim, RecoversIntrinsicsLasersAndAxis) {
     const double angle = std::acos(std::min(1.0, std::abs(n_true.dot(c.lasers[k].normal)))) * kDeg;
     // Plane offset where it matters: on the axis, mid-height of the scan volume.
     const Eigen::Vector3d p_true =
-        cam_from_rig * (rig.lasers[k].position_mm -
-                        rig.lasers[k].signed_distance(Eigen::Vector3d(0, 0, 100)) *
-                            rig.lasers[k].normal -
-                        rig.lasers[k].position_mm + Eigen::Vector3d(0, 0, 100));
+        cam_from_rig *
+        (rig.lasers[k].position_mm -
+         rig.lasers[k].signed_distance(Eigen::Vector3d(0, 0, 100)) * rig.lasers[k].normal -
+         rig.lasers[k].position_mm + Eigen::Vector3d(0, 0, 100));
     const double offset = std::abs(c.lasers[k].normal.dot(p_true) - c.lasers[k].distance_mm);
     std::printf("  laser %d: normal off by %.4f deg (sigma %.4f), plane offset %.4f mm\n", k, angle,
                 c.uncertainty.laser_normal_deg[k], offset);
