@@ -122,6 +122,26 @@ struct LaserOnBoard {
   }
 };
 
+// The same for a hand-held view (the lasers are fixed in the rig, the board is anywhere).
+struct HandheldLaser {
+  Vector2d obs;
+  double sigma;
+  template <typename T>
+  bool operator()(const T* in, const T* pose, const T* normal, const T* dist, T* r) const {
+    T x, y;
+    undistort(in, obs.x(), obs.y(), &x, &y);
+    const T ez[3] = {T(0), T(0), T(1)};
+    T nb[3];
+    ceres::AngleAxisRotatePoint(pose, ez, nb);
+    const T ray[3] = {x, y, T(1)};
+    const T den = nb[0] * ray[0] + nb[1] * ray[1] + nb[2] * ray[2];
+    const T t = (nb[0] * pose[3] + nb[1] * pose[4] + nb[2] * pose[5]) / den;
+    r[0] = (normal[0] * t * ray[0] + normal[1] * t * ray[1] + normal[2] * t * ray[2] - dist[0]) /
+           sigma;
+    return true;
+  }
+};
+
 // Keeps the axis point the one nearest the camera centre (removes the slide along the axis).
 struct AxisGauge {
   template <typename T>
@@ -300,15 +320,21 @@ CalibrationReport calibrate_scanner(const std::vector<CalibrationView>& views, i
     int laser;
     double theta;
     Vector2d uv;
+    int handheld_view;  // index into `used` of a hand-held view, -1 for platter views
   };
   std::vector<LaserObs> laser_obs;
   std::vector<std::vector<Vector3d>> laser_pts(laser_count);
   CameraModel cam0{w, h, in[0], in[1], in[2], in[3], in[4], in[5], in[6], in[7], in[8]};
-  for (int j : tt) {
+  for (int j = 0; j < static_cast<int>(used.size()); ++j) {
     const CalibrationView& v = views[used[j]];
-    if (v.laser_on.empty()) continue;
+    if (static_cast<int>(v.laser_on.size()) != laser_count) continue;
     Vector3d o, nb;
-    board_pose_at(pose0, axis_p, point_p, v.angle_rad, &o, &nb);
+    if (v.on_turntable) {
+      board_pose_at(pose0, axis_p, point_p, v.angle_rad, &o, &nb);
+    } else {
+      o = tr_of(j);
+      nb = rot_of(j).col(2);
+    }
     const Eigen::Matrix3d rb = rot_of(j);
     for (int l = 0; l < laser_count; ++l) {
       for (const LinePeak& p : extract_laser_line(v.laser_on[l], v.image, opt.line)) {
@@ -330,7 +356,7 @@ CalibrationReport calibrate_scanner(const std::vector<CalibrationView>& views, i
         for (int xx = std::max(0, xc - 40); xx <= std::min(w - 1, xc + 40); ++xx)
           bright = std::max<int>(bright, v.image.at(xx, p.row)[v.image.channels > 1 ? 1 : 0]);
         if (v.image.at(xc, p.row)[v.image.channels > 1 ? 1 : 0] < bright / 2) continue;
-        laser_obs.push_back({l, v.angle_rad, Vector2d(p.u, p.row)});
+        laser_obs.push_back({l, v.angle_rad, Vector2d(p.u, p.row), v.on_turntable ? -1 : j});
         laser_pts[l].push_back(x);
       }
     }
@@ -370,11 +396,18 @@ CalibrationReport calibrate_scanner(const std::vector<CalibrationView>& views, i
       ++n_corners;
     }
   }
-  for (const auto& o : laser_obs)
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<LaserOnBoard, 1, 9, 6, 3, 3, 3, 1>(
-                                 new LaserOnBoard{o.uv, o.theta, opt.laser_sigma_mm}),
-                             loss, in, pose0, axis_p, point_p, lnormal[o.laser].data(),
-                             &ldist[o.laser]);
+  for (const auto& o : laser_obs) {
+    if (o.handheld_view >= 0)
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<HandheldLaser, 1, 9, 6, 3, 1>(
+                                   new HandheldLaser{o.uv, opt.laser_sigma_mm}),
+                               loss, in, pose[o.handheld_view].data(), lnormal[o.laser].data(),
+                               &ldist[o.laser]);
+    else
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<LaserOnBoard, 1, 9, 6, 3, 3, 3, 1>(
+                                   new LaserOnBoard{o.uv, o.theta, opt.laser_sigma_mm}),
+                               loss, in, pose0, axis_p, point_p, lnormal[o.laser].data(),
+                               &ldist[o.laser]);
+  }
   problem.AddResidualBlock(new ceres::AutoDiffCostFunction<AxisGauge, 1, 3, 3>(new AxisGauge),
                            nullptr, axis_p, point_p);
   problem.SetManifold(axis_p, new ceres::SphereManifold<3>());
@@ -413,8 +446,12 @@ CalibrationReport calibrate_scanner(const std::vector<CalibrationView>& views, i
     }
     for (const auto& o : laser_obs) {
       double r;
-      LaserOnBoard{o.uv, o.theta, 1.0}(in, pose0, axis_p, point_p, lnormal[o.laser].data(),
-                                       &ldist[o.laser], &r);
+      if (o.handheld_view >= 0)
+        HandheldLaser{o.uv, 1.0}(in, pose[o.handheld_view].data(), lnormal[o.laser].data(),
+                                 &ldist[o.laser], &r);
+      else
+        LaserOnBoard{o.uv, o.theta, 1.0}(in, pose0, axis_p, point_p, lnormal[o.laser].data(),
+                                         &ldist[o.laser], &r);
       sse_laser += r * r;
     }
   }

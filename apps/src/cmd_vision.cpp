@@ -28,7 +28,7 @@ struct CalibrateArgs {
   bool sim = false;
   std::string rig, out;
   int handheld = 16;
-  double angle_step_deg = 10.0, angle_max_deg = 70.0;
+  double angle_step_deg = 5.0, angle_max_deg = 70.0;
 };
 
 int run_calibrate(const CalibrateArgs& a) {

@@ -727,6 +727,9 @@ std::vector<CalibrationShot> render_calibration_shots(TurntableCamera& camera,
     camera.set_pattern(p);
     CalibrationShot s;
     s.image = camera.render(0.0, 0u);
+    if (plan.handheld_lasers)
+      for (int k = 0; k < camera.laser_count(); ++k)
+        s.laser_on.push_back(camera.render(0.0, 1u << k));
     s.pattern = p;
     shots.push_back(std::move(s));
   }

@@ -182,14 +182,15 @@ struct CalibrationPlan {
   ChessboardPattern board;          //!< size, squares, albedo; the pose is set per shot
   double platter_bottom_mm = 25.0;  //!< lowest corner row above the platter top
   double platter_offset_mm = 30.0;  //!< board plane this far off the axis (toward the camera)
-  std::vector<double> platter_angles_rad;  //!< empty: -70..70 degrees every 10 degrees
+  std::vector<double> platter_angles_rad;  //!< empty: -70..70 degrees every 10 degrees (tests and CLI use 5)
   int handheld_views = 16;
+  bool handheld_lasers = true;  //!< also render each laser's frame of the hand-held views
 };
 struct CalibrationShot {
   Image8 image;  //!< lasers off
   bool on_turntable = false;
   double angle_rad = 0;
-  std::vector<Image8> laser_on;  //!< platter shots: laser k alone
+  std::vector<Image8> laser_on;  //!< laser k alone (platter shots; hand-held if asked)
   ChessboardPattern pattern;     //!< the exact board pose of the shot (object frame)
 };
 //! Renders the plan's shots (restores the camera's pattern mode afterwards). Deterministic.
