@@ -124,3 +124,24 @@ struct ParticlesArgs {
 int run_particles(const ParticlesArgs& args);
 
 }  // namespace scanmesh::cli
+
+// --- device path: calibration and reconstruction from laser frames: apps/src/cmd_vision.cpp ---
+namespace scanmesh {
+class ScanStepSource;
+}
+
+namespace scanmesh::cli {
+
+struct ReconstructArgs {
+  std::string calib;  //!< calibration YAML
+  std::string out;    //!< grid file
+  std::string method = "gaussian";
+  int n_phi = 512, n_h = 512;
+  double h0_mm = 0.0, dh_mm = 0.45;
+  bool clean = true;
+};
+//! Reconstructs a grid from any step source (simulated or a recorded session).
+int run_reconstruct_from(const ScanStepSource& source, const ReconstructArgs& args);
+void register_vision_commands(CLI::App& app, CommandList& commands);
+
+}  // namespace scanmesh::cli

@@ -1,0 +1,533 @@
+// Scanner calibration: OpenCV detection and initial estimates, one joint Ceres bundle adjustment
+// (docs/acquisition.md, "Calibration").
+#include "scanmesh/acquisition/calibration.h"
+
+#include <ceres/ceres.h>
+#include <ceres/rotation.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "scanmesh/core/errors.h"
+
+namespace scanmesh {
+namespace {
+
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+constexpr double kRadToDeg = 180.0 / std::numbers::pi;
+
+template <typename T>
+void distort(const T* in, T x, T y, T* u, T* v) {
+  // in: fx fy cx cy k1 k2 p1 p2 k3
+  const T r2 = x * x + y * y;
+  const T radial = T(1) + r2 * (in[4] + r2 * (in[5] + r2 * in[8]));
+  const T xd = x * radial + T(2) * in[6] * x * y + in[7] * (r2 + T(2) * x * x);
+  const T yd = y * radial + in[6] * (r2 + T(2) * y * y) + T(2) * in[7] * x * y;
+  *u = in[0] * xd + in[2];
+  *v = in[1] * yd + in[3];
+}
+
+// Undistortion by fixed-point iteration (enough iterations for the mild distortion of webcams;
+// differentiable through the Jets).
+template <typename T>
+void undistort(const T* in, double u, double v, T* x, T* y) {
+  const T xd = (T(u) - in[2]) / in[0], yd = (T(v) - in[3]) / in[1];
+  T px = xd, py = yd;
+  for (int it = 0; it < 20; ++it) {
+    const T r2 = px * px + py * py;
+    const T radial = T(1) + r2 * (in[4] + r2 * (in[5] + r2 * in[8]));
+    const T dx = T(2) * in[6] * px * py + in[7] * (r2 + T(2) * px * px);
+    const T dy = in[6] * (r2 + T(2) * py * py) + T(2) * in[7] * px * py;
+    px = (xd - dx) / radial;
+    py = (yd - dy) / radial;
+  }
+  *x = px;
+  *y = py;
+}
+
+// Board point -> camera frame for a view on the platter at angle theta:
+// X(theta) = R(axis, theta) (X(0) - p) + p, X(0) = R0 Xb + t0.
+template <typename T>
+void turntable_point(const T* pose0, const T* axis, const T* point, double theta, const T* xb,
+                     T* out) {
+  T x0[3];
+  ceres::AngleAxisRotatePoint(pose0, xb, x0);
+  for (int k = 0; k < 3; ++k) x0[k] += pose0[3 + k] - point[k];
+  const T aa[3] = {axis[0] * T(theta), axis[1] * T(theta), axis[2] * T(theta)};
+  ceres::AngleAxisRotatePoint(aa, x0, out);
+  for (int k = 0; k < 3; ++k) out[k] += point[k];
+}
+
+struct HandheldCorner {
+  Vector2d obs;
+  Vector3d xb;
+  double sigma;
+  template <typename T>
+  bool operator()(const T* in, const T* pose, T* r) const {
+    const T xbt[3] = {T(xb.x()), T(xb.y()), T(xb.z())};
+    T p[3];
+    ceres::AngleAxisRotatePoint(pose, xbt, p);
+    for (int k = 0; k < 3; ++k) p[k] += pose[3 + k];
+    T u, v;
+    distort(in, p[0] / p[2], p[1] / p[2], &u, &v);
+    r[0] = (u - obs.x()) / sigma;
+    r[1] = (v - obs.y()) / sigma;
+    return true;
+  }
+};
+
+struct TurntableCorner {
+  Vector2d obs;
+  Vector3d xb;
+  double theta, sigma;
+  template <typename T>
+  bool operator()(const T* in, const T* pose0, const T* axis, const T* point, T* r) const {
+    const T xbt[3] = {T(xb.x()), T(xb.y()), T(xb.z())};
+    T p[3];
+    turntable_point(pose0, axis, point, theta, xbt, p);
+    T u, v;
+    distort(in, p[0] / p[2], p[1] / p[2], &u, &v);
+    r[0] = (u - obs.x()) / sigma;
+    r[1] = (v - obs.y()) / sigma;
+    return true;
+  }
+};
+
+// A laser peak on the board: its pixel ray meets the board plane at X; X must lie on the plane.
+struct LaserOnBoard {
+  Vector2d obs;
+  double theta, sigma;
+  template <typename T>
+  bool operator()(const T* in, const T* pose0, const T* axis, const T* point, const T* normal,
+                  const T* dist, T* r) const {
+    T x, y;
+    undistort(in, obs.x(), obs.y(), &x, &y);
+    // Board plane at theta: through the image of the board origin, normal = image of board z.
+    const T zero[3] = {T(0), T(0), T(0)}, ez[3] = {T(0), T(0), T(1)};
+    T o[3], e[3];
+    turntable_point(pose0, axis, point, theta, zero, o);
+    turntable_point(pose0, axis, point, theta, ez, e);
+    const T nb[3] = {e[0] - o[0], e[1] - o[1], e[2] - o[2]};
+    const T ray[3] = {x, y, T(1)};
+    const T den = nb[0] * ray[0] + nb[1] * ray[1] + nb[2] * ray[2];
+    const T t = (nb[0] * o[0] + nb[1] * o[1] + nb[2] * o[2]) / den;
+    const T X[3] = {t * ray[0], t * ray[1], t * ray[2]};
+    r[0] = (normal[0] * X[0] + normal[1] * X[1] + normal[2] * X[2] - dist[0]) / sigma;
+    return true;
+  }
+};
+
+// The same for a hand-held view (the lasers are fixed in the rig, the board is anywhere).
+struct HandheldLaser {
+  Vector2d obs;
+  double sigma;
+  template <typename T>
+  bool operator()(const T* in, const T* pose, const T* normal, const T* dist, T* r) const {
+    T x, y;
+    undistort(in, obs.x(), obs.y(), &x, &y);
+    const T ez[3] = {T(0), T(0), T(1)};
+    T nb[3];
+    ceres::AngleAxisRotatePoint(pose, ez, nb);
+    const T ray[3] = {x, y, T(1)};
+    const T den = nb[0] * ray[0] + nb[1] * ray[1] + nb[2] * ray[2];
+    const T t = (nb[0] * pose[3] + nb[1] * pose[4] + nb[2] * pose[5]) / den;
+    r[0] = (normal[0] * t * ray[0] + normal[1] * t * ray[1] + normal[2] * t * ray[2] - dist[0]) /
+           sigma;
+    return true;
+  }
+};
+
+// Keeps the axis point the one nearest the camera centre (removes the slide along the axis).
+struct AxisGauge {
+  template <typename T>
+  bool operator()(const T* axis, const T* point, T* r) const {
+    r[0] = T(10.0) * (axis[0] * point[0] + axis[1] * point[1] + axis[2] * point[2]);
+    return true;
+  }
+};
+
+Eigen::Matrix3d rodrigues(const Vector3d& aa) {
+  const double a = aa.norm();
+  if (a < 1e-15) return Eigen::Matrix3d::Identity();
+  return Eigen::AngleAxisd(a, aa / a).toRotationMatrix();
+}
+Vector3d to_angle_axis(const Eigen::Matrix3d& r) {
+  const Eigen::AngleAxisd aa(r);
+  return aa.angle() * aa.axis();
+}
+
+Vector3d fit_plane(const std::vector<Vector3d>& pts, double* d) {
+  Vector3d c = Vector3d::Zero();
+  for (const auto& p : pts) c += p;
+  c /= static_cast<double>(pts.size());
+  Eigen::Matrix3d m = Eigen::Matrix3d::Zero();
+  for (const auto& p : pts) m += (p - c) * (p - c).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(m);
+  Vector3d n = es.eigenvectors().col(0);
+  *d = n.dot(c);
+  if (*d < 0) n = -n, *d = -*d;
+  return n;
+}
+
+cv::Mat to_gray(const Image8& img) {
+  cv::Mat gray(img.height, img.width, CV_8UC1);
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const std::uint8_t* p = img.at(x, y);
+      gray.at<std::uint8_t>(y, x) =
+          img.channels >= 3
+              ? static_cast<std::uint8_t>((299 * p[0] + 587 * p[1] + 114 * p[2]) / 1000)
+              : p[0];
+    }
+  return gray;
+}
+
+}  // namespace
+
+CalibrationReport calibrate_scanner(const std::vector<CalibrationView>& views, int laser_count,
+                                    const CalibrationOptions& opt) {
+  const PatternSpec& pat = opt.pattern;
+  if (pat.corner_cols < 3 || pat.corner_rows < 3 || !(pat.square_mm > 0))
+    throw InvalidInputError("calibration: the pattern needs >= 3 x 3 corners and a square size");
+  if (laser_count < 0 || laser_count > 8)
+    throw InvalidInputError("calibration: laser count must be 0..8");
+  if (views.empty()) throw InvalidInputError("calibration: no views");
+  const int w = views[0].image.width, h = views[0].image.height;
+  for (const auto& v : views) {
+    if (v.image.width != w || v.image.height != h)
+      throw InvalidInputError("calibration: all views must have the same image size");
+    if (v.on_turntable && static_cast<int>(v.laser_on.size()) != laser_count && !v.laser_on.empty())
+      throw InvalidInputError("calibration: a platter view has " +
+                              std::to_string(v.laser_on.size()) + " laser frames, expected " +
+                              std::to_string(laser_count));
+  }
+  CalibrationReport report;
+  report.corners.resize(views.size());
+  const cv::Size pattern_size(pat.corner_cols, pat.corner_rows);
+  std::vector<cv::Point3f> board;
+  for (int r = 0; r < pat.corner_rows; ++r)
+    for (int c = 0; c < pat.corner_cols; ++c)
+      board.emplace_back(static_cast<float>(c * pat.square_mm),
+                         static_cast<float>(r * pat.square_mm), 0.0f);
+
+  // 1. Corners.
+  std::vector<int> used;  // view indices with corners
+  std::vector<std::vector<cv::Point2f>> image_points;
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    const cv::Mat gray = to_gray(views[i].image);
+    std::vector<cv::Point2f> corners;
+    const bool found = cv::findChessboardCorners(
+        gray, pattern_size, corners, cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
+    if (!found) {
+      ++report.views_rejected;
+      continue;
+    }
+    cv::cornerSubPix(gray, corners, cv::Size(7, 7), cv::Size(-1, -1),
+                     cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 100, 1e-4));
+    // OpenCV may start at either end of the board: put corner (0, 0) at the image top-left.
+    if (corners.front().x + corners.front().y > corners.back().x + corners.back().y)
+      std::reverse(corners.begin(), corners.end());
+    for (const auto& c : corners) report.corners[i].emplace_back(c.x, c.y);
+    used.push_back(static_cast<int>(i));
+    image_points.push_back(corners);
+  }
+  report.views_detected = static_cast<int>(used.size());
+  if (used.size() < 3)
+    throw InvalidInputError("calibration: the chessboard was found in " +
+                            std::to_string(used.size()) + " views; at least 3 are needed");
+
+  // 2. OpenCV initial intrinsics and view poses.
+  std::vector<std::vector<cv::Point3f>> object_points(used.size(), board);
+  cv::Mat k, dist;
+  std::vector<cv::Mat> rvecs, tvecs;
+  int flags = 0;
+  if (!opt.estimate_k3) flags |= cv::CALIB_FIX_K3;
+  report.opencv_rms_px = cv::calibrateCamera(object_points, image_points, cv::Size(w, h), k, dist,
+                                             rvecs, tvecs, flags);
+  double in[9] = {
+      k.at<double>(0, 0), k.at<double>(1, 1), k.at<double>(0, 2),
+      k.at<double>(1, 2), dist.at<double>(0), dist.at<double>(1),
+      dist.at<double>(2), dist.at<double>(3), dist.total() > 4 ? dist.at<double>(4) : 0.0};
+  std::vector<std::array<double, 6>> pose(used.size());
+  for (std::size_t j = 0; j < used.size(); ++j)
+    for (int q = 0; q < 3; ++q) {
+      pose[j][q] = rvecs[j].at<double>(q);
+      pose[j][3 + q] = tvecs[j].at<double>(q);
+    }
+
+  // 3. Initial axis from the platter views: relative rotations give the direction, the
+  // positions of the board origin the point.
+  std::vector<int> tt;  // indices into `used` of platter views
+  for (std::size_t j = 0; j < used.size(); ++j)
+    if (views[used[j]].on_turntable) tt.push_back(static_cast<int>(j));
+  if (tt.size() < 3)
+    throw InvalidInputError("calibration: the board was found standing on the platter in " +
+                            std::to_string(tt.size()) + " views; at least 3 are needed");
+  const int ref = tt.front();
+  const double theta_ref = views[used[ref]].angle_rad;
+  auto rot_of = [&](int j) { return rodrigues(Vector3d(pose[j][0], pose[j][1], pose[j][2])); };
+  auto tr_of = [&](int j) { return Vector3d(pose[j][3], pose[j][4], pose[j][5]); };
+  Vector3d axis = Vector3d::Zero();
+  for (int j : tt) {
+    const double dtheta = views[used[j]].angle_rad - theta_ref;
+    if (std::abs(dtheta) < 1e-3) continue;
+    const Vector3d aa = to_angle_axis(rot_of(j) * rot_of(ref).transpose());
+    axis += (dtheta > 0 ? 1.0 : -1.0) * aa.normalized() * std::abs(dtheta);
+  }
+  if (!(axis.norm() > 0))
+    throw InvalidInputError("calibration: the platter views all have the same angle");
+  axis.normalize();
+  Vector3d point;
+  {
+    Eigen::MatrixXd a(3 * tt.size() + 1, 3);
+    Eigen::VectorXd b(3 * tt.size() + 1);
+    for (std::size_t q = 0; q < tt.size(); ++q) {
+      const double dtheta = views[used[tt[q]]].angle_rad - theta_ref;
+      const Eigen::Matrix3d r = Eigen::AngleAxisd(dtheta, axis).toRotationMatrix();
+      a.block<3, 3>(3 * q, 0) = Eigen::Matrix3d::Identity() - r;
+      b.segment<3>(3 * q) = tr_of(tt[q]) - r * tr_of(ref);
+    }
+    a.row(3 * tt.size()) = axis.transpose();
+    b(3 * tt.size()) = 0;
+    point = a.colPivHouseholderQr().solve(b);
+  }
+  double axis_p[3] = {axis.x(), axis.y(), axis.z()};
+  double point_p[3] = {point.x(), point.y(), point.z()};
+  double pose0[6];
+  {
+    const Eigen::Matrix3d back = Eigen::AngleAxisd(-theta_ref, axis).toRotationMatrix();
+    const Vector3d aa = to_angle_axis(back * rot_of(ref));
+    const Vector3d t0 = back * (tr_of(ref) - point) + point;
+    for (int q = 0; q < 3; ++q) pose0[q] = aa[q], pose0[3 + q] = t0[q];
+  }
+  auto board_pose_at = [&](const double* in_pose0, const double* ax, const double* pt, double theta,
+                           Vector3d* origin, Vector3d* normal) {
+    const double zero[3] = {0, 0, 0}, ez[3] = {0, 0, 1};
+    double o[3], e[3];
+    turntable_point(in_pose0, ax, pt, theta, zero, o);
+    turntable_point(in_pose0, ax, pt, theta, ez, e);
+    *origin = Vector3d(o[0], o[1], o[2]);
+    *normal = Vector3d(e[0] - o[0], e[1] - o[1], e[2] - o[2]);
+  };
+
+  // 4. Laser peaks on the printed area of the board, and initial planes.
+  struct LaserObs {
+    int laser;
+    double theta;
+    Vector2d uv;
+    int handheld_view;  // index into `used` of a hand-held view, -1 for platter views
+  };
+  std::vector<LaserObs> laser_obs;
+  std::vector<std::vector<Vector3d>> laser_pts(laser_count);
+  CameraModel cam0{w, h, in[0], in[1], in[2], in[3], in[4], in[5], in[6], in[7], in[8]};
+  for (int j = 0; j < static_cast<int>(used.size()); ++j) {
+    const CalibrationView& v = views[used[j]];
+    if (static_cast<int>(v.laser_on.size()) != laser_count) continue;
+    Vector3d o, nb;
+    if (v.on_turntable) {
+      board_pose_at(pose0, axis_p, point_p, v.angle_rad, &o, &nb);
+    } else {
+      o = tr_of(j);
+      nb = rot_of(j).col(2);
+    }
+    const Eigen::Matrix3d rb = rot_of(j);
+    for (int l = 0; l < laser_count; ++l) {
+      for (const LinePeak& p : extract_laser_line(v.laser_on[l], v.image, opt.line)) {
+        const Vector3d ray = cam0.ray(p.u, p.row);
+        const double t = nb.dot(o) / nb.dot(ray);
+        const Vector3d x = t * ray;
+        const Vector3d q = rb.transpose() * (x - tr_of(j));  // board coordinates
+        const double s = pat.square_mm, margin = 0.5 * s;
+        if (q.x() < -s + margin || q.x() > pat.corner_cols * s - margin || q.y() < -s + margin ||
+            q.y() > pat.corner_rows * s - margin)
+          continue;
+        // Only the middle of white squares: an albedo edge inside the line's profile moves its
+        // centre (the line runs along the board's y, so the x edges matter most).
+        const double ex = std::abs(std::remainder(q.x(), s));
+        const double ey = std::abs(std::remainder(q.y(), s));
+        if (ex < opt.laser_edge_margin_mm || ey < 0.5 * opt.laser_edge_margin_mm) continue;
+        const int xc = static_cast<int>(std::lround(p.u));
+        int bright = 0;
+        for (int xx = std::max(0, xc - 40); xx <= std::min(w - 1, xc + 40); ++xx)
+          bright = std::max<int>(bright, v.image.at(xx, p.row)[v.image.channels > 1 ? 1 : 0]);
+        if (v.image.at(xc, p.row)[v.image.channels > 1 ? 1 : 0] < bright / 2) continue;
+        laser_obs.push_back({l, v.angle_rad, Vector2d(p.u, p.row), v.on_turntable ? -1 : j});
+        laser_pts[l].push_back(x);
+      }
+    }
+  }
+  std::vector<std::array<double, 3>> lnormal(laser_count);
+  std::vector<double> ldist(laser_count, 0.0);
+  for (int l = 0; l < laser_count; ++l) {
+    if (laser_pts[l].size() < 20)
+      throw InvalidInputError("calibration: laser " + std::to_string(l) + " was seen at only " +
+                              std::to_string(laser_pts[l].size()) +
+                              " points on the board (need platter views with that laser on)");
+    const Vector3d n = fit_plane(laser_pts[l], &ldist[l]);
+    lnormal[l] = {n.x(), n.y(), n.z()};
+  }
+
+  // 5. Joint bundle adjustment.
+  ceres::Problem problem;
+  ceres::LossFunction* loss = new ceres::HuberLoss(opt.robust_scale);
+  const auto own = ceres::DO_NOT_TAKE_OWNERSHIP;
+  (void)own;
+  int n_corners = 0;
+  for (std::size_t j = 0; j < used.size(); ++j) {
+    const CalibrationView& v = views[used[j]];
+    for (int c = 0; c < pat.corner_cols * pat.corner_rows; ++c) {
+      const Vector2d obs(image_points[j][c].x, image_points[j][c].y);
+      const Vector3d xb(board[c].x, board[c].y, 0.0);
+      if (v.on_turntable) {
+        problem.AddResidualBlock(
+            new ceres::AutoDiffCostFunction<TurntableCorner, 2, 9, 6, 3, 3>(
+                new TurntableCorner{obs, xb, v.angle_rad, opt.corner_sigma_px}),
+            loss, in, pose0, axis_p, point_p);
+      } else {
+        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<HandheldCorner, 2, 9, 6>(
+                                     new HandheldCorner{obs, xb, opt.corner_sigma_px}),
+                                 loss, in, pose[j].data());
+      }
+      ++n_corners;
+    }
+  }
+  for (const auto& o : laser_obs) {
+    if (o.handheld_view >= 0)
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<HandheldLaser, 1, 9, 6, 3, 1>(
+                                   new HandheldLaser{o.uv, opt.laser_sigma_mm}),
+                               loss, in, pose[o.handheld_view].data(), lnormal[o.laser].data(),
+                               &ldist[o.laser]);
+    else
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<LaserOnBoard, 1, 9, 6, 3, 3, 3, 1>(
+                                   new LaserOnBoard{o.uv, o.theta, opt.laser_sigma_mm}),
+                               loss, in, pose0, axis_p, point_p, lnormal[o.laser].data(),
+                               &ldist[o.laser]);
+  }
+  problem.AddResidualBlock(new ceres::AutoDiffCostFunction<AxisGauge, 1, 3, 3>(new AxisGauge),
+                           nullptr, axis_p, point_p);
+  problem.SetManifold(axis_p, new ceres::SphereManifold<3>());
+  for (int l = 0; l < laser_count; ++l)
+    problem.SetManifold(lnormal[l].data(), new ceres::SphereManifold<3>());
+  if (!opt.estimate_k3) problem.SetManifold(in, new ceres::SubsetManifold(9, {8}));
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_SCHUR;
+  so.max_num_iterations = 200;
+  so.function_tolerance = 1e-12;
+  so.parameter_tolerance = 1e-12;
+  so.num_threads = 1;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &problem, &summary);
+  if (!summary.IsSolutionUsable())
+    throw InvalidInputError("calibration: the joint adjustment failed: " + summary.message);
+
+  // 6. Quality and uncertainty.
+  Calibration cal;
+  cal.camera = {w, h, in[0], in[1], in[2], in[3], in[4], in[5], in[6], in[7], in[8]};
+  double sse_corner = 0, sse_laser = 0;
+  {
+    // Unweighted residuals, evaluated without the loss.
+    for (std::size_t j = 0; j < used.size(); ++j) {
+      const CalibrationView& v = views[used[j]];
+      for (int c = 0; c < pat.corner_cols * pat.corner_rows; ++c) {
+        const Vector2d obs(image_points[j][c].x, image_points[j][c].y);
+        const Vector3d xb(board[c].x, board[c].y, 0.0);
+        double r[2];
+        if (v.on_turntable)
+          TurntableCorner{obs, xb, v.angle_rad, 1.0}(in, pose0, axis_p, point_p, r);
+        else
+          HandheldCorner{obs, xb, 1.0}(in, pose[j].data(), r);
+        sse_corner += r[0] * r[0] + r[1] * r[1];
+      }
+    }
+    for (const auto& o : laser_obs) {
+      double r;
+      if (o.handheld_view >= 0)
+        HandheldLaser{o.uv, 1.0}(in, pose[o.handheld_view].data(), lnormal[o.laser].data(),
+                                 &ldist[o.laser], &r);
+      else
+        LaserOnBoard{o.uv, o.theta, 1.0}(in, pose0, axis_p, point_p, lnormal[o.laser].data(),
+                                         &ldist[o.laser], &r);
+      sse_laser += r * r;
+    }
+  }
+  cal.reprojection_rms_px = std::sqrt(sse_corner / (2.0 * n_corners));
+  cal.laser_rms_mm = laser_obs.empty() ? 0.0 : std::sqrt(sse_laser / laser_obs.size());
+  cal.views = static_cast<int>(used.size());
+  cal.corners = n_corners;
+  cal.laser_points = static_cast<int>(laser_obs.size());
+  // Axis: pointing up means against the image's down direction (camera y).
+  Vector3d a(axis_p[0], axis_p[1], axis_p[2]);
+  const Vector3d p(point_p[0], point_p[1], point_p[2]);
+  // The rotation model uses +theta about `a`; the platter turns counter-clockwise seen from
+  // above, so `a` is already the up direction unless the angles were given clockwise.
+  cal.axis_direction = a;
+  // Platter top: the lowest corner row is bottom_mm above it.
+  {
+    double low[3];
+    const double xb[3] = {0.0, (pat.corner_rows - 1) * pat.square_mm, 0.0};
+    turntable_point(pose0, axis_p, point_p, 0.0, xb, low);
+    const Vector3d lowest(low[0], low[1], low[2]);
+    cal.axis_origin_mm = p + (a.dot(lowest - p) - pat.bottom_mm) * a;
+  }
+  for (int l = 0; l < laser_count; ++l)
+    cal.lasers.push_back({l == 0 && laser_count == 2   ? "left"
+                          : l == 1 && laser_count == 2 ? "right"
+                                                       : "laser" + std::to_string(l),
+                          Vector3d(lnormal[l][0], lnormal[l][1], lnormal[l][2]), ldist[l]});
+
+  // A-posteriori variance factor: the weighted residuals should have unit variance.
+  const int n_res = summary.num_residuals_reduced;
+  const int n_par = summary.num_effective_parameters_reduced;
+  const double s2 = n_res > n_par ? 2.0 * summary.final_cost / (n_res - n_par) : 1.0;
+  ceres::Covariance::Options co;
+  co.algorithm_type = ceres::DENSE_SVD;
+  co.null_space_rank = -1;
+  co.min_reciprocal_condition_number = 1e-14;
+  ceres::Covariance cov(co);
+  std::vector<std::pair<const double*, const double*>> blocks = {
+      {in, in}, {axis_p, axis_p}, {point_p, point_p}};
+  for (int l = 0; l < laser_count; ++l) {
+    blocks.emplace_back(lnormal[l].data(), lnormal[l].data());
+    blocks.emplace_back(&ldist[l], &ldist[l]);
+  }
+  CalibrationUncertainty& u = cal.uncertainty;
+  if (cov.Compute(blocks, &problem)) {
+    double ci[81];
+    cov.GetCovarianceBlock(in, in, ci);
+    double* fields[9] = {&u.fx, &u.fy, &u.cx, &u.cy, &u.k1, &u.k2, &u.p1, &u.p2, &u.k3};
+    for (int q = 0; q < 9; ++q) *fields[q] = std::sqrt(std::max(0.0, s2 * ci[q * 10]));
+    auto angular = [&](const double* v, const Vector3d& dir) {
+      double c[9];
+      cov.GetCovarianceBlock(v, v, c);
+      const Eigen::Matrix3d m = Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(c);
+      const Eigen::Matrix3d pr = Eigen::Matrix3d::Identity() - dir * dir.transpose();
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(pr * m * pr);
+      return std::sqrt(std::max(0.0, s2 * es.eigenvalues().maxCoeff())) * kRadToDeg;
+    };
+    u.axis_direction_deg = angular(axis_p, a);
+    double cp[9];
+    cov.GetCovarianceBlock(point_p, point_p, cp);
+    const Eigen::Matrix3d mp = Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(cp);
+    u.axis_point_mm = std::sqrt(std::max(
+        0.0, s2 * Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(mp).eigenvalues().maxCoeff()));
+    for (int l = 0; l < laser_count; ++l) {
+      u.laser_normal_deg.push_back(angular(lnormal[l].data(), cal.lasers[l].normal));
+      double cd;
+      cov.GetCovarianceBlock(&ldist[l], &ldist[l], &cd);
+      u.laser_distance_mm.push_back(std::sqrt(std::max(0.0, s2 * cd)));
+    }
+  } else {
+    u.laser_normal_deg.assign(laser_count, -1.0);
+    u.laser_distance_mm.assign(laser_count, -1.0);
+    u.axis_direction_deg = u.axis_point_mm = -1.0;
+  }
+  report.calibration = cal;
+  return report;
+}
+
+}  // namespace scanmesh

@@ -1,0 +1,184 @@
+// scanmesh calibrate / reconstruct: the device path from laser frames to a range grid
+// (docs/acquisition.md, docs/cli.md).
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+
+#include "cli_support.h"
+#include "commands.h"
+#include "scanmesh/acquisition/calibration.h"
+#include "scanmesh/acquisition/reconstruction.h"
+#include "scanmesh/acquisition/scan_cleaning.h"
+#include "scanmesh/core/errors.h"
+#include "scanmesh/core/grid_file.h"
+#include "scanmesh/sim/turntable_camera.h"
+#include "sim_step_source.h"
+
+namespace scanmesh::cli {
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+sim::RigConfig load_rig(const std::string& path) {
+  return path.empty() ? sim::builtin_ciclop_rig() : sim::RigConfig::from_yaml_file(path);
+}
+
+struct CalibrateArgs {
+  bool sim = false;
+  std::string rig, out;
+  int handheld = 16;
+  double angle_step_deg = 5.0, angle_max_deg = 70.0;
+};
+
+int run_calibrate(const CalibrateArgs& a) {
+  if (!a.sim)
+    throw InvalidInputError(
+        "calibrate: only --sim is available on this branch (session folders come with the "
+        "devices branch)");
+  const sim::RigConfig rig = load_rig(a.rig);
+  // The pattern mode renders only the board and the platter; the scene is unused.
+  const sim::Scene unused = sim::Scene::from_yaml_text(
+      "objects:\n  - {type: sphere, name: unused, center: [0, 0, -1000], radius: 1}\n", "unused");
+  sim::TurntableCamera camera(unused, rig);
+  sim::CalibrationPlan plan;
+  plan.handheld_views = a.handheld;
+  for (double d = -a.angle_max_deg; d <= a.angle_max_deg + 1e-9; d += a.angle_step_deg)
+    plan.platter_angles_rad.push_back(d * kDeg);
+  Progress progress("rendering calibration views");
+  progress.update(0, 1);
+  const auto shots = sim::render_calibration_shots(camera, plan);
+  progress.finish();
+  std::vector<CalibrationView> views;
+  for (const auto& s : shots) views.push_back({s.image, s.on_turntable, s.angle_rad, s.laser_on});
+  CalibrationOptions opt;
+  opt.pattern.corner_cols = plan.board.corner_cols;
+  opt.pattern.corner_rows = plan.board.corner_rows;
+  opt.pattern.square_mm = plan.board.square_mm;
+  opt.pattern.bottom_mm = plan.platter_bottom_mm;
+  const CalibrationReport rep = calibrate_scanner(views, camera.laser_count(), opt);
+  const Calibration& c = rep.calibration;
+  c.write_yaml(a.out);
+  std::printf("calibrated from %d views (%d not found): %d corners, %d laser points\n",
+              rep.views_detected, rep.views_rejected, c.corners, c.laser_points);
+  std::printf("  reprojection RMS %.4f px (OpenCV initial %.4f px), laser RMS %.4f mm\n",
+              c.reprojection_rms_px, rep.opencv_rms_px, c.laser_rms_mm);
+  std::printf("  fx %.3f +- %.3f  fy %.3f +- %.3f  cx %.3f +- %.3f  cy %.3f +- %.3f\n", c.camera.fx,
+              c.uncertainty.fx, c.camera.fy, c.uncertainty.fy, c.camera.cx, c.uncertainty.cx,
+              c.camera.cy, c.uncertainty.cy);
+  for (std::size_t k = 0; k < c.lasers.size(); ++k)
+    std::printf("  laser %s: normal +- %.4f deg, distance %.3f +- %.4f mm\n",
+                c.lasers[k].name.c_str(), c.uncertainty.laser_normal_deg[k],
+                c.lasers[k].distance_mm, c.uncertainty.laser_distance_mm[k]);
+  std::printf("  axis direction +- %.4f deg, axis point +- %.4f mm\n",
+              c.uncertainty.axis_direction_deg, c.uncertainty.axis_point_mm);
+  std::printf("wrote %s\n", a.out.c_str());
+  return kSuccess;
+}
+
+struct ReconstructCliArgs {
+  bool sim = false;
+  std::string scene, rig;
+  int steps = 400;
+  ReconstructArgs common;
+};
+
+}  // namespace
+
+int run_reconstruct_from(const ScanStepSource& source, const ReconstructArgs& a) {
+  const Calibration cal = Calibration::read_yaml(a.calib);
+  ReconstructionOptions ro;
+  ro.line.method = parse_peak_method(a.method);
+  ro.grid.n_phi = a.n_phi;
+  ro.grid.n_h = a.n_h;
+  ro.grid.h0 = a.h0_mm;
+  ro.grid.dh = a.dh_mm;
+  ReconstructionStats st;
+  Progress progress("reconstructing");
+  RangeGrid grid = reconstruct_grid(source, cal, ro, &st, [&](std::size_t done, std::size_t total) {
+    progress.update(static_cast<int>(done), static_cast<int>(total));
+  });
+  progress.finish();
+  std::printf(
+      "%zu steps: %zu peaks (%zu saturated; rejected: %zu wide, %zu secondary, %zu room "
+      "light), %zu points used (%zu on the platter, %zu weak), %zu cells\n",
+      st.steps, st.peaks, st.line.saturated, st.line.rejected_wide, st.line.rejected_secondary,
+      st.line.rejected_ambient, st.grid.used, st.grid.platter_points, st.grid.weak_points,
+      st.grid.cells);
+  if (a.clean) {
+    const ScanCleaningReport r = clean_scan_grid(grid);
+    std::printf(
+        "cleaning: %zu low-confidence, %zu platter, %zu hair, %zu spikes, %zu fragment "
+        "cells removed; %zu holes (%zu cells) filled; %zu -> %zu valid cells\n",
+        r.low_confidence_removed, r.platter_removed, r.hair_removed, r.spikes.spikes_removed,
+        r.spikes.fragment_cells_removed, r.holes_filled, r.cells_filled, r.valid_before,
+        r.valid_after);
+  }
+  grid.metadata["calibration"] = a.calib;
+  write_grid(a.out, grid);
+  std::printf("wrote %s\n", a.out.c_str());
+  return kSuccess;
+}
+
+void register_vision_commands(CLI::App& app, CommandList& commands) {
+  auto cal = std::make_shared<CalibrateArgs>();
+  auto* cal_cmd = app.add_subcommand(
+      "calibrate", "Calibrate camera, lasers and turntable axis (simulated rig: --sim)");
+  cal_cmd->add_flag("--sim", cal->sim, "Render the calibration views with the simulated camera");
+  cal_cmd->add_option("--rig", cal->rig, "Simulated rig YAML (default: built-in Ciclop-like)")
+      ->check(CLI::ExistingFile);
+  cal_cmd->add_option("--handheld", cal->handheld, "Hand-held board views")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 100));
+  cal_cmd->add_option("--angle-step", cal->angle_step_deg, "Platter views every this (deg)")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 90.0));
+  cal_cmd->add_option("--angle-max", cal->angle_max_deg, "Platter views within +- this (deg)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 85.0));
+  cal_cmd->add_option("-o,--out", cal->out, "Calibration YAML to write")->required();
+  commands.push_back({cal_cmd, [cal] { return run_calibrate(*cal); }});
+
+  auto rec = std::make_shared<ReconstructCliArgs>();
+  auto* rec_cmd = app.add_subcommand(
+      "reconstruct", "Laser frames -> range grid: extract, triangulate, assemble, clean");
+  rec_cmd->add_flag("--sim", rec->sim, "Render the steps with the simulated camera");
+  rec_cmd->add_option("--scene", rec->scene, "Scene YAML (default: built-in head)")
+      ->check(CLI::ExistingFile);
+  rec_cmd->add_option("--rig", rec->rig, "Simulated rig YAML (default: built-in Ciclop-like)")
+      ->check(CLI::ExistingFile);
+  rec_cmd->add_option("--steps", rec->steps, "Turntable steps per turn")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 100000));
+  ReconstructArgs& c = rec->common;
+  rec_cmd->add_option("--calib", c.calib, "Calibration YAML")->required()->check(CLI::ExistingFile);
+  rec_cmd->add_option("--method", c.method, "Peak method: com, gaussian, blais-rioux")
+      ->capture_default_str();
+  rec_cmd->add_option("--n-phi", c.n_phi, "Grid columns")
+      ->capture_default_str()
+      ->check(CLI::Range(2, 8192));
+  rec_cmd->add_option("--n-h", c.n_h, "Grid rows")
+      ->capture_default_str()
+      ->check(CLI::Range(2, 8192));
+  rec_cmd->add_option("--h0", c.h0_mm, "Height of row 0 (mm)")->capture_default_str();
+  rec_cmd->add_option("--dh", c.dh_mm, "Row spacing (mm)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  rec_cmd->add_flag("!--no-clean", c.clean, "Do not clean the assembled grid");
+  rec_cmd->add_option("-o,--out", c.out, "Output grid file (.smg)")->required();
+  commands.push_back(
+      {rec_cmd, [rec] {
+         if (!rec->sim)
+           throw InvalidInputError(
+               "reconstruct: only --sim is available on this branch (session "
+               "folders come with the devices branch)");
+         const sim::Scene scene = rec->scene.empty() ? sim::builtin_head_scene()
+                                                     : sim::Scene::from_yaml_file(rec->scene);
+         const sim::TurntableCamera camera(scene, load_rig(rec->rig));
+         // A recorded session plugs in here instead: any ScanStepSource.
+         const SimulatedStepSource source(camera, static_cast<std::size_t>(rec->steps));
+         return run_reconstruct_from(source, rec->common);
+       }});
+}
+
+}  // namespace scanmesh::cli
