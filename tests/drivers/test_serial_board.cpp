@@ -1,0 +1,111 @@
+// The real termios transport and board driver against the simulated firmware behind a pty.
+#include <gtest/gtest.h>
+
+#include "board_test_support.h"
+#include "scanmesh/drivers/serial_transport.h"
+#include "scanmesh/sim/pty_board.h"
+
+namespace scanmesh::drivers {
+namespace {
+
+using test::expect_device_error;
+
+struct Rig {
+  explicit Rig(sim::SimBoardOptions o = test::fast_board()) : pty(o) {}
+  Board make_board() {
+    return Board(open_serial_transport(pty.slave_path()), make_horus_dialect(),
+                 test::fast_driver());
+  }
+  sim::PtyBoard pty;
+};
+
+TEST(SerialBoard, ConnectsMovesAndSwitchesLasers) {
+  Rig rig;
+  Board board = rig.make_board();
+  board.connect();
+  EXPECT_EQ(board.firmware_banner(), "Horus 0.2 ['$' for help]");
+  EXPECT_TRUE(rig.pty.firmware().motor_enabled());
+  board.move_to(std::numbers::pi / 2);
+  EXPECT_NEAR(rig.pty.firmware().angle_rad(), std::numbers::pi / 2, 1e-6);
+  board.move_by(-std::numbers::pi / 4);
+  EXPECT_NEAR(rig.pty.firmware().angle_rad(), std::numbers::pi / 4, 1e-6);
+  board.move_to(std::numbers::pi);  // back to absolute mode
+  EXPECT_NEAR(rig.pty.firmware().angle_rad(), std::numbers::pi, 1e-6);
+  board.set_laser(1, true);
+  EXPECT_EQ(rig.pty.firmware().laser_mask(), 2u);
+  board.set_laser(0, true);
+  EXPECT_EQ(rig.pty.firmware().laser_mask(), 3u);
+  board.set_laser(1, false);
+  EXPECT_EQ(rig.pty.firmware().laser_mask(), 1u);
+  board.shutdown();
+  EXPECT_EQ(rig.pty.firmware().laser_mask(), 0u);
+  EXPECT_FALSE(rig.pty.firmware().motor_enabled());
+}
+
+TEST(SerialBoard, RejectsUnknownFirmwareVersion) {
+  auto o = test::fast_board();
+  o.banner = "Horus 3.0 ['$' for help]";
+  Rig rig(o);
+  Board board = rig.make_board();
+  expect_device_error([&] { board.connect(); }, rig.pty.slave_path(), "unsupported firmware");
+}
+
+TEST(SerialBoard, ErrorReplyNamesTheCommand) {
+  auto o = test::fast_board();
+  o.faults.refuse_lasers = true;
+  Rig rig(o);
+  Board board = rig.make_board();
+  board.connect();
+  expect_device_error([&] { board.set_laser(0, true); }, rig.pty.slave_path(),
+                      "refused 'M71 T1': error: laser driver fault");
+}
+
+TEST(SerialBoard, MissingOkOnASafeCommandIsRetried) {
+  Rig rig;
+  Board board = rig.make_board();
+  board.connect();
+  const int n = rig.pty.firmware().commands_received();
+  rig.pty.firmware().set_faults({.drop_ok_at_command = n + 1});
+  board.set_laser(0, true);  // first "ok" lost, the repeat is acknowledged
+  EXPECT_EQ(rig.pty.firmware().commands_received(), n + 2);
+  EXPECT_EQ(rig.pty.firmware().laser_mask(), 1u);
+}
+
+TEST(SerialBoard, GarbledOkOnARelativeMoveIsNotRetried) {
+  Rig rig;
+  Board board = rig.make_board();
+  board.connect();
+  board.move_by(0.1);  // switches to relative mode
+  const int n = rig.pty.firmware().commands_received();
+  rig.pty.firmware().set_faults({.garble_ok_at_command = n + 1});
+  expect_device_error([&] { board.move_by(0.1); }, rig.pty.slave_path(), "garbled reply");
+  // A repeat would have turned the table twice: exactly one more command reached the board.
+  EXPECT_EQ(rig.pty.firmware().commands_received(), n + 1);
+  EXPECT_NEAR(rig.pty.firmware().angle_rad(), 0.2, 1e-6);
+}
+
+TEST(SerialBoard, MoveThatNeverCompletesTimesOut) {
+  Rig rig;
+  Board board = rig.make_board();
+  board.connect();
+  const int n = rig.pty.firmware().commands_received();
+  rig.pty.firmware().set_faults({.hang_move_at_command = n + 1});
+  expect_device_error([&] { board.move_to(1.0); }, rig.pty.slave_path(), "no 'ok' for 'G1 X");
+}
+
+TEST(SerialBoard, UnplugIsReported) {
+  Rig rig;
+  Board board = rig.make_board();
+  board.connect();
+  const int n = rig.pty.firmware().commands_received();
+  rig.pty.firmware().set_faults({.unplug_at_command = n + 1});
+  expect_device_error([&] { board.move_to(1.0); }, rig.pty.slave_path(), "unplugged");
+}
+
+TEST(SerialBoard, MissingDeviceNodeIsADeviceError) {
+  expect_device_error([] { open_serial_transport("/dev/ttyACM-scanmesh-none"); },
+                      "/dev/ttyACM-scanmesh-none", "cannot open");
+}
+
+}  // namespace
+}  // namespace scanmesh::drivers
