@@ -134,7 +134,7 @@ void Board::move_to(double angle_rad) {
     command(dialect_->absolute_mode(), options_.command_timeout, Retry::Safe);
     relative_ = false;
   }
-  const double degrees = angle_rad * 180.0 / std::numbers::pi;
+  const double degrees = (angle_rad - origin_rad_) * 180.0 / std::numbers::pi;
   const double delta = (angle_rad - angle_rad_) * 180.0 / std::numbers::pi;
   // An absolute move is idempotent: repeating it after a lost "ok" cannot turn the table twice.
   command(dialect_->move(degrees), move_timeout(delta), Retry::Safe);

@@ -17,6 +17,8 @@ namespace scanmesh::test {
 
 // Time scale of the simulated board in tests: a 1 s move takes 5 ms.
 constexpr double kTimeScale = 0.005;
+// The simulated table stands on whole microsteps (3200 per turn): half a microstep.
+constexpr double kAngleTolerance = std::numbers::pi / 3200;
 
 inline sim::SimBoardOptions fast_board() {
   sim::SimBoardOptions o;

@@ -26,11 +26,11 @@ TEST(SerialBoard, ConnectsMovesAndSwitchesLasers) {
   EXPECT_EQ(board.firmware_banner(), "Horus 0.2 ['$' for help]");
   EXPECT_TRUE(rig.pty.firmware().motor_enabled());
   board.move_to(std::numbers::pi / 2);
-  EXPECT_NEAR(rig.pty.firmware().angle_rad(), std::numbers::pi / 2, 1e-6);
+  EXPECT_NEAR(rig.pty.firmware().angle_rad(), std::numbers::pi / 2, test::kAngleTolerance);
   board.move_by(-std::numbers::pi / 4);
-  EXPECT_NEAR(rig.pty.firmware().angle_rad(), std::numbers::pi / 4, 1e-6);
+  EXPECT_NEAR(rig.pty.firmware().angle_rad(), std::numbers::pi / 4, test::kAngleTolerance);
   board.move_to(std::numbers::pi);  // back to absolute mode
-  EXPECT_NEAR(rig.pty.firmware().angle_rad(), std::numbers::pi, 1e-6);
+  EXPECT_NEAR(rig.pty.firmware().angle_rad(), std::numbers::pi, test::kAngleTolerance);
   board.set_laser(1, true);
   EXPECT_EQ(rig.pty.firmware().laser_mask(), 2u);
   board.set_laser(0, true);
@@ -81,7 +81,7 @@ TEST(SerialBoard, GarbledOkOnARelativeMoveIsNotRetried) {
   expect_device_error([&] { board.move_by(0.1); }, rig.pty.slave_path(), "garbled reply");
   // A repeat would have turned the table twice: exactly one more command reached the board.
   EXPECT_EQ(rig.pty.firmware().commands_received(), n + 1);
-  EXPECT_NEAR(rig.pty.firmware().angle_rad(), 0.2, 1e-6);
+  EXPECT_NEAR(rig.pty.firmware().angle_rad(), 0.2, test::kAngleTolerance);
 }
 
 TEST(SerialBoard, MoveThatNeverCompletesTimesOut) {

@@ -50,7 +50,7 @@ TEST(UsbBoard, DetachesKernelDriverSetsLineCodingAndScans) {
   EXPECT_EQ(board.device_name(), kDeviceName);
   for (int i = 1; i <= 4; ++i) {
     board.move_to(i * 0.25);
-    EXPECT_NEAR(rig.firmware->angle_rad(), i * 0.25, 1e-6);
+    EXPECT_NEAR(rig.firmware->angle_rad(), i * 0.25, test::kAngleTolerance);
     board.set_laser(0, true);
     board.set_laser(1, true);
     EXPECT_EQ(rig.firmware->laser_mask(), 3u);

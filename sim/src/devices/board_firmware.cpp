@@ -42,7 +42,9 @@ void SimBoardFirmware::reset() {
   relative_ = false;
   motor_ = false;
   lasers_ = 0;
-  from_deg_ = to_deg_ = 0;
+  from_steps_ = to_steps_ = 0;
+  initial_steps_ = std::llround(options_.initial_angle_rad / (2 * std::numbers::pi) *
+                                options_.steps_per_revolution);
   move_start_ = move_end_ = now;
   move_hangs_ = false;
   const auto boot = std::chrono::duration_cast<Clock::duration>(
@@ -118,18 +120,21 @@ void SimBoardFirmware::execute(const std::string& raw, Clock::time_point now) {
         return;
       }
       // Position at `start` (the previous move is over by then unless it hangs).
-      const double from = to_deg_;
-      const double to = relative_ ? from + *x : *x;
-      const double seconds = std::abs(to - from) / feed_deg_per_s_ * options_.time_scale;
-      from_deg_ = from;
-      to_deg_ = to;
+      const double steps_per_deg = options_.steps_per_revolution / 360.0;
+      const long long from = to_steps_;
+      const long long to =
+          relative_ ? from + std::llround(*x * steps_per_deg) : std::llround(*x * steps_per_deg);
+      const double seconds = std::abs(static_cast<double>(to - from)) / steps_per_deg /
+                             feed_deg_per_s_ * options_.time_scale;
+      from_steps_ = from;
+      to_steps_ = to;
       move_start_ = start;
       move_end_ = start + std::chrono::duration_cast<Clock::duration>(
                               std::chrono::duration<double>(seconds));
       if (n == f.hang_move_at_command) {
         // The stepper stalls halfway and the firmware never reports completion.
         move_hangs_ = true;
-        to_deg_ = from + (to - from) * 0.5;
+        to_steps_ = from + (to - from) / 2;
         busy_until_ = Clock::time_point::max();
         return;
       }
@@ -194,15 +199,16 @@ bool SimBoardFirmware::has_output_ready() const {
 double SimBoardFirmware::angle_rad() const {
   std::lock_guard lock(mutex_);
   const auto now = Clock::now();
-  double deg = to_deg_;
+  double steps = static_cast<double>(initial_steps_ + to_steps_);
   if (!move_hangs_ && now < move_end_ && move_end_ > move_start_) {
     const double u = now <= move_start_
                          ? 0.0
                          : std::chrono::duration<double>(now - move_start_).count() /
                                std::chrono::duration<double>(move_end_ - move_start_).count();
-    deg = from_deg_ + (to_deg_ - from_deg_) * u;
+    steps = static_cast<double>(initial_steps_ + from_steps_) +
+            static_cast<double>(to_steps_ - from_steps_) * u;
   }
-  return deg * std::numbers::pi / 180.0;
+  return steps * 2 * std::numbers::pi / options_.steps_per_revolution;
 }
 
 unsigned SimBoardFirmware::laser_mask() const {

@@ -72,6 +72,9 @@ class Board {
   void move_to(double angle_rad);
   //! Relative move by `delta_rad`; never retried (a repeat would turn twice).
   void move_by(double delta_rad);
+  //! Declares that the table stands at `angle_rad` now: later absolute moves are sent relative
+  //! to this origin. Used when resuming a scan (the firmware forgets its position on reset).
+  void set_origin(double angle_rad) { origin_rad_ = angle_rad_ = angle_rad; }
   void set_laser(int index, bool on);
   void set_motor(bool enabled);
   void set_feed_rate(double deg_per_s);
@@ -92,6 +95,7 @@ class Board {
   BoardOptions options_;
   std::string banner_;
   double angle_rad_ = 0;
+  double origin_rad_ = 0;
   bool relative_ = false;
 };
 

@@ -30,6 +30,12 @@ struct SimBoardOptions {
   std::string banner = "Horus 0.2 ['$' for help]";
   int laser_count = 2;
   double max_feed_deg_per_s = 200.0;
+  //! Microsteps per turn (200-step motor, 1/16 microstepping): positions are whole microsteps,
+  //! so the same commanded angle always lands on the same position.
+  int steps_per_revolution = 3200;
+  //! Where the table physically stands at power-on (firmware coordinate 0). A resumed
+  //! simulated scan starts where the interrupted one left the table.
+  double initial_angle_rad = 0;
   BoardFaults faults;
 };
 
@@ -76,8 +82,8 @@ class SimBoardFirmware {
   bool stalled_ = false;
   unsigned lasers_ = 0;
   double feed_deg_per_s_ = 60.0;
-  // The move in progress (or the last one): from `from_deg` at `move_start` to `to_deg`.
-  double from_deg_ = 0, to_deg_ = 0;
+  // The move in progress (or the last one), in microsteps of firmware coordinate.
+  long long from_steps_ = 0, to_steps_ = 0, initial_steps_ = 0;
   Clock::time_point move_start_, move_end_;
   bool move_hangs_ = false;
 };
