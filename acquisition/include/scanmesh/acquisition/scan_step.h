@@ -14,11 +14,11 @@
 namespace scanmesh {
 
 struct ScanStep {
-  std::size_t index = 0;         //!< 0 .. step_count-1
-  double angle_rad = 0;          //!< turntable angle the board reported for this step
-  Image8 laser_off;              //!< all lasers off: background and texture colour
+  std::size_t index = 0;       //!< 0 .. step_count-1
+  double angle_rad = 0;        //!< turntable angle the board reported for this step
+  Image8 laser_off;            //!< all lasers off: background and texture colour
   std::vector<Image8> laser_on;  //!< laser_on[k]: only laser k switched on
-  double timestamp_s = 0;        //!< capture time of the laser-off frame (monotonic clock)
+  double timestamp_s = 0;      //!< capture time of the laser-off frame (monotonic clock)
 };
 
 //! A finite, random-access sequence of scan steps (a session on disk, a simulation, memory).
