@@ -124,3 +124,8 @@ struct ParticlesArgs {
 int run_particles(const ParticlesArgs& args);
 
 }  // namespace scanmesh::cli
+
+// --- devices, scan sessions and replay: apps/src/cmd_devices.cpp ---
+namespace scanmesh::cli {
+void register_devices_commands(CLI::App& app, CommandList& commands);
+}  // namespace scanmesh::cli
