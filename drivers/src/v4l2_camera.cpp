@@ -338,6 +338,8 @@ Frame V4l2Camera::grab() {
   if (fd_ < 0 || !streaming_) throw DeviceError(path_, "camera is not streaming");
   const auto deadline = std::chrono::steady_clock::now() + settings_.timeout;
   Frame frame;
+  frame.dropped_before = flushed_dropped_;
+  flushed_dropped_ = 0;
   int corrupt = 0;
   std::string last_corruption;
   for (;;) {
@@ -357,11 +359,11 @@ Frame V4l2Camera::grab() {
     if (left.count() <= 0)
       throw DeviceError(path_,
                         "no frame within " + std::to_string(settings_.timeout.count()) + " ms");
-    // poll() in slices of at most 20 ms followed by a non-blocking DQBUF: on a real node poll
+    // poll() in slices of 1 ms followed by a non-blocking DQBUF: on a real node poll
     // wakes when a buffer is done; on an emulated node (a socket, docs/testing.md) it never
     // signals POLLIN and the slice bounds the latency.
     pollfd p{fd_, POLLIN | POLLPRI, 0};
-    const int r = ::poll(&p, 1, static_cast<int>(std::min<long long>(left.count(), 20)));
+    const int r = ::poll(&p, 1, static_cast<int>(std::min<long long>(left.count(), 1)));
     if (r < 0 && errno != EINTR) fail("poll", errno);
     if (r > 0 && (p.revents & (POLLERR | POLLHUP | POLLNVAL)) && !(p.revents & POLLIN))
       throw DeviceError(path_, "unplugged (poll reported a hang-up)");
@@ -371,10 +373,16 @@ Frame V4l2Camera::grab() {
 void V4l2Camera::flush() {
   for (int i = 0; i < 64; ++i) {
     Frame f;
+    bool got = false;
     try {
-      if (!try_dequeue(f)) return;
+      got = try_dequeue(f);
     } catch (const FileFormatError&) {
+      got = true;
+      ++f.dropped_before;
     }
+    // Frames lost before a flushed frame are still reported, with the next frame returned.
+    flushed_dropped_ += f.dropped_before;
+    if (!got) return;
   }
 }
 

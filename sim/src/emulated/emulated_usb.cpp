@@ -194,7 +194,7 @@ gboolean handle_usb_ioctl(UMockdevIoctlBase*, UMockdevIoctlClient* client, gpoin
       }
       // Nothing to reap. The usbfs node under umockdev is a socket that always polls writable,
       // so libusb asks again at once; a short pause keeps that loop from eating a core.
-      std::this_thread::sleep_for(std::chrono::microseconds(200));
+      std::this_thread::sleep_for(std::chrono::microseconds(50));
       complete(client, -1, gone ? ENODEV : EAGAIN);
       return TRUE;
     }

@@ -116,6 +116,7 @@ class V4l2Camera final : public Camera {
   bool streaming_ = false;
   std::optional<std::uint32_t> last_sequence_;
   std::uint64_t dropped_ = 0;
+  std::uint32_t flushed_dropped_ = 0;  //!< drops seen while flushing, reported with the next frame
 };
 
 //! Decodes one frame payload into RGB. YUYV (BT.601 full range, as UVC cameras send it) and
