@@ -169,8 +169,15 @@ void Board::set_feed_rate(double deg_per_s) {
 }
 
 void Board::shutdown() noexcept {
+  // Each command on its own: a board with one laser refuses "laser 2", which must not keep the
+  // motor from being released.
+  for (int i = 0; i < 2; ++i) {
+    try {
+      set_laser(i, false);
+    } catch (...) {
+    }
+  }
   try {
-    for (int i = 0; i < 2; ++i) set_laser(i, false);
     set_motor(false);
   } catch (...) {
   }

@@ -139,6 +139,27 @@ TEST_F(ScanCli, WithoutResumeAnExistingSessionIsNotTouched) {
   EXPECT_EQ(mismatch.exit_code, 3) << mismatch.output;
 }
 
+TEST(DevicesCli, ListsCamerasAndBoardsEvenWhenThereAreNone) {
+  const RunResult r = run("devices");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("cameras:"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("boards (USB):"), std::string::npos) << r.output;
+  const RunResult j = run("devices --json");
+  EXPECT_EQ(j.exit_code, 0) << j.output;
+  EXPECT_NE(j.output.find("\"usb_boards\""), std::string::npos) << j.output;
+}
+
+TEST(ScanCliUsage, HardwareScanNeedsBothDevices) {
+  const RunResult r = run("scan --device /dev/video0 --out /tmp/scanmesh-never");
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  const RunResult missing = run("scan --device /dev/video-none --board /dev/ttyACM-none --out " +
+                                scratch("missing").string());
+  EXPECT_EQ(missing.exit_code, 7) << missing.output;
+  EXPECT_NE(missing.output.find("/dev/video-none: cannot open: no such device node"),
+            std::string::npos)
+      << missing.output;
+}
+
 TEST_F(ScanCli, ReplayIsDeterministic) {
   const fs::path a = scratch("replay_a"), b = scratch("replay_b");
   const RunResult ra = run("replay " + reference_->string() + " --out " + a.string() + " --frames");

@@ -42,6 +42,18 @@ TEST(SerialBoard, ConnectsMovesAndSwitchesLasers) {
   EXPECT_FALSE(rig.pty.firmware().motor_enabled());
 }
 
+TEST(SerialBoard, ShutdownReleasesTheMotorEvenIfALaserIsRefused) {
+  auto o = test::fast_board();
+  o.laser_count = 1;
+  Rig rig(o);
+  Board board = rig.make_board();
+  board.connect();
+  board.set_laser(0, true);
+  board.shutdown();  // "M70 T2" is answered with an error on a one-laser board
+  EXPECT_EQ(rig.pty.firmware().laser_mask(), 0u);
+  EXPECT_FALSE(rig.pty.firmware().motor_enabled());
+}
+
 TEST(SerialBoard, RejectsUnknownFirmwareVersion) {
   auto o = test::fast_board();
   o.banner = "Horus 3.0 ['$' for help]";

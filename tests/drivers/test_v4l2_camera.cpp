@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <fcntl.h>
+#include <linux/videodev2.h>
 #include <poll.h>
 #include <unistd.h>
 
@@ -160,6 +161,14 @@ TEST(V4l2Camera, UnsupportedFormatIsADeviceError) {
                       "/dev/video0", "unsupported format mjpeg (the camera offers YUYV)");
 }
 
+TEST(V4l2Camera, BusyCameraIsADeviceError) {
+  auto o = CameraRig::fast_camera();
+  o.faults.busy = true;
+  CameraRig rig(o);
+  expect_device_error([&] { V4l2Camera cam("/dev/video0", rig.settings(PixelFormat::Yuyv)); },
+                      "/dev/video0", "VIDIOC_S_FMT: busy (another program streams from it)");
+}
+
 TEST(V4l2Camera, ControlsReachTheDevice) {
   CameraRig rig;
   auto s = rig.settings(PixelFormat::Yuyv);
@@ -167,8 +176,18 @@ TEST(V4l2Camera, ControlsReachTheDevice) {
   s.gain = 7;
   s.brightness = 3;
   V4l2Camera cam("/dev/video0", s);
-  const Frame f = cam.grab();
-  EXPECT_EQ(f.rgb.width, 64);
+  EXPECT_EQ(rig.devices.camera_control(V4L2_CID_EXPOSURE_AUTO), V4L2_EXPOSURE_MANUAL);
+  EXPECT_EQ(rig.devices.camera_control(V4L2_CID_EXPOSURE_ABSOLUTE), 120);
+  EXPECT_EQ(rig.devices.camera_control(V4L2_CID_GAIN), 7);
+  EXPECT_EQ(rig.devices.camera_control(V4L2_CID_BRIGHTNESS), 3);
+  EXPECT_EQ(cam.grab().rgb.width, 64);
+}
+
+TEST(V4l2Camera, WithoutSettingsNoControlIsTouched) {
+  CameraRig rig;
+  V4l2Camera cam("/dev/video0", rig.settings(PixelFormat::Yuyv));
+  EXPECT_FALSE(rig.devices.camera_control(V4L2_CID_EXPOSURE_AUTO).has_value());
+  EXPECT_FALSE(rig.devices.camera_control(V4L2_CID_GAIN).has_value());
 }
 
 // The boundary of emulation (docs/testing.md): MMAP buffers are requested and queried through

@@ -142,7 +142,9 @@ gboolean handle_v4l2_ioctl(UMockdevIoctlBase*, UMockdevIoctlClient* client, gpoi
         return done(-1, EINVAL);
       }
       if (request != VIDIOC_G_FMT) {
-        if (cam->streaming && request == VIDIOC_S_FMT) {
+        // Another process streaming from the camera (CameraFaults::busy), or this one already
+        // streaming: uvcvideo refuses a format change with EBUSY.
+        if (request == VIDIOC_S_FMT && (cam->streaming || options.faults.busy)) {
           umockdev_ioctl_data_unref(d);
           return done(-1, EBUSY);
         }
@@ -295,6 +297,15 @@ gboolean handle_v4l2_ioctl(UMockdevIoctlBase*, UMockdevIoctlClient* client, gpoi
 }
 
 }  // namespace
+
+std::optional<int> EmulatedDevices::camera_control(std::uint32_t id) const {
+  if (impl_->cameras.empty()) return std::nullopt;
+  CameraEmulation* cam = impl_->cameras.front();
+  std::lock_guard lock(cam->mutex);
+  const auto it = cam->controls.find(id);
+  if (it == cam->controls.end()) return std::nullopt;
+  return it->second;
+}
 
 std::string EmulatedDevices::add_camera(std::shared_ptr<SimCamera> camera, int index) {
   auto* cam = new CameraEmulation();

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "scanmesh/sim/board_firmware.h"
@@ -46,6 +47,8 @@ class EmulatedDevices {
   //! Adds /dev/videoN (a UVC-like capture node) whose V4L2 ioctls are answered by `camera`.
   //! Returns the device path.
   std::string add_camera(std::shared_ptr<SimCamera> camera, int index = 0);
+  //! The value the host last set for V4L2 control `id` on the first camera, if it set one.
+  std::optional<int> camera_control(std::uint32_t id) const;
 
   struct Impl;
 

@@ -36,7 +36,7 @@ struct CameraFaults {
   std::set<std::uint32_t> corrupt_sequences;  //!< delivered with a damaged payload
   std::int64_t eio_at_sequence = -1;          //!< DQBUF fails with EIO instead of this frame
   std::int64_t unplug_at_sequence = -1;       //!< from this frame on: ENODEV
-  bool busy = false;                          //!< opening fails with EBUSY
+  bool busy = false;  //!< another program streams: VIDIOC_S_FMT fails with EBUSY
 };
 
 struct SimCameraOptions {
