@@ -219,7 +219,8 @@ int run_scan(const ScanArgs& a) {
   drivers::Board board(open_board_transport(a.sim ? pty->slave_path() : a.board, a.baud),
                        drivers::make_horus_dialect(), board_options);
   board.connect();
-  board.set_origin(table_angle);
+  // A resumed scan continues where the table was left (docs/hardware.md).
+  if (session && session->steps_done() > 0) board.declare_position(table_angle);
 
   if (!session) {
     SessionHeader h;

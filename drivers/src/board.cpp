@@ -46,6 +46,9 @@ class HorusDialect final : public BoardDialect {
   std::string absolute_mode() const override { return "G90"; }
   std::string relative_mode() const override { return "G91"; }
   std::string move(double degrees) const override { return "G1 X" + gcode_number(degrees); }
+  std::string set_position(double degrees) const override {
+    return "G92 X" + gcode_number(degrees);
+  }
   std::string laser(int index, bool on) const override {
     return std::string(on ? "M71" : "M70") + " T" + std::to_string(index + 1);
   }
@@ -134,7 +137,7 @@ void Board::move_to(double angle_rad) {
     command(dialect_->absolute_mode(), options_.command_timeout, Retry::Safe);
     relative_ = false;
   }
-  const double degrees = (angle_rad - origin_rad_) * 180.0 / std::numbers::pi;
+  const double degrees = angle_rad * 180.0 / std::numbers::pi;
   const double delta = (angle_rad - angle_rad_) * 180.0 / std::numbers::pi;
   // An absolute move is idempotent: repeating it after a lost "ok" cannot turn the table twice.
   command(dialect_->move(degrees), move_timeout(delta), Retry::Safe);
@@ -150,6 +153,13 @@ void Board::move_by(double delta_rad) {
   const double degrees = delta_rad * 180.0 / std::numbers::pi;
   command(dialect_->move(degrees), move_timeout(degrees), Retry::Never);
   angle_rad_ += delta_rad;
+}
+
+void Board::declare_position(double angle_rad) {
+  if (!std::isfinite(angle_rad)) throw InvalidInputError("turntable angle must be finite");
+  command(dialect_->set_position(angle_rad * 180.0 / std::numbers::pi), options_.command_timeout,
+          Retry::Safe);
+  angle_rad_ = angle_rad;
 }
 
 void Board::set_laser(int index, bool on) {

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <numbers>
+#include <vector>
 
 #include "scanmesh/acquisition/capture.h"
 #include "scanmesh/core/errors.h"
@@ -24,7 +25,8 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr int kWidth = 48, kHeight = 32;
-constexpr std::size_t kSteps = 100;
+constexpr std::size_t kSteps = 100;      // the bit-for-bit scan
+constexpr std::size_t kFaultSteps = 30;  // the fault-and-resume scans
 
 // Sessions go to /dev/shm when there is one: the fsync calls still run but cost nothing there
 // (about 60 ms per step on this machine's ext4); durability against power loss is not what
@@ -60,14 +62,14 @@ struct Rig {
   }
 
   // Runs the capture loop with the real drivers into `dir` (created or resumed).
-  CaptureReport scan(const fs::path& dir, double table_angle) {
+  CaptureReport scan(const fs::path& dir, double table_angle, std::size_t steps = kSteps) {
     drivers::BoardOptions bo;
     bo.command_timeout = std::chrono::milliseconds(200);
     bo.move_timeout_floor = std::chrono::milliseconds(400);
     drivers::Board board(drivers::open_usb_transport({.vendor_id = 0x2341, .product_id = 0x0043}),
                          drivers::make_horus_dialect(), bo);
     board.connect();
-    board.set_origin(table_angle);
+    if (table_angle != 0) board.declare_position(table_angle);
     drivers::CameraSettings cs;
     cs.width = kWidth;
     cs.height = kHeight;
@@ -81,7 +83,7 @@ struct Rig {
       session.emplace(SessionWriter::resume(dir));
     } else {
       SessionHeader h;
-      h.step_count = kSteps;
+      h.step_count = steps;
       h.laser_count = 2;
       h.camera = cam.descriptor();
       h.board_device = board.device_name();
@@ -112,58 +114,14 @@ double last_step_angle(const fs::path& dir) {
   return m.steps.empty() ? 0.0 : m.steps.back().angle_rad;
 }
 
-class EmulatedScan : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    reference_ = new fs::path(scratch("reference"));
+TEST(EmulatedScan, HundredStepsTwoLasersMatchTheRendererBitForBit) {
+  const fs::path dir = scratch("hundred");
+  {
     Rig rig(0);
-    report_ = new CaptureReport(rig.scan(*reference_, 0));
+    const CaptureReport r = rig.scan(dir, 0);
+    ASSERT_EQ(r.steps_done, kSteps);
   }
-  static void TearDownTestSuite() {
-    fs::remove_all(*reference_);
-    delete reference_;
-    delete report_;
-  }
-  // Runs a scan with a fault, expects a DeviceError naming `device` and a step, then resumes
-  // with healthy devices and compares with the uninterrupted reference.
-  void fault_then_resume(const std::string& name, sim::BoardFaults bf, sim::CameraFaults cf,
-                         const std::string& device, const std::string& problem) {
-    const fs::path dir = scratch(name);
-    std::size_t failed_at = 0;
-    {
-      Rig rig(0, bf, cf);
-      try {
-        rig.scan(dir, 0);
-        ADD_FAILURE() << name << ": no error";
-      } catch (const DeviceError& e) {
-        const std::string what = e.what();
-        EXPECT_EQ(e.device(), device) << what;
-        EXPECT_NE(what.find(problem), std::string::npos) << what;
-        EXPECT_NE(what.find("step "), std::string::npos) << what;
-        failed_at = read_session_manifest(dir).steps.size();
-        EXPECT_NE(what.find("step " + std::to_string(failed_at) + " of 100"), std::string::npos)
-            << what;
-      }
-    }
-    EXPECT_GT(failed_at, 0u);
-    EXPECT_LT(failed_at, kSteps);
-    const double angle = last_step_angle(dir);
-    Rig rig(angle);
-    const CaptureReport r = rig.scan(dir, angle);
-    EXPECT_EQ(r.first_step, failed_at);
-    EXPECT_EQ(r.steps_done, kSteps);
-    EXPECT_TRUE(test::sessions_identical(dir, *reference_));
-    fs::remove_all(dir);
-  }
-  static fs::path* reference_;
-  static CaptureReport* report_;
-};
-fs::path* EmulatedScan::reference_ = nullptr;
-CaptureReport* EmulatedScan::report_ = nullptr;
-
-TEST_F(EmulatedScan, HundredStepsTwoLasersMatchTheRendererBitForBit) {
-  ASSERT_EQ(report_->steps_done, kSteps);
-  const SessionReader reader(*reference_);
+  const SessionReader reader(dir);
   ASSERT_EQ(reader.step_count(), kSteps);
   ASSERT_TRUE(reader.complete());
   EXPECT_EQ(reader.manifest().header.camera.card, "Simulated UVC Camera");
@@ -178,44 +136,76 @@ TEST_F(EmulatedScan, HundredStepsTwoLasersMatchTheRendererBitForBit) {
     ASSERT_EQ(s.laser_on[0].pixels, render(table, 1).pixels) << "step " << i << " laser 0";
     ASSERT_EQ(s.laser_on[1].pixels, render(table, 2).pixels) << "step " << i << " laser 1";
   }
-}
-
-// Board command numbers: 3 at connect (feed, G90, M17); each step sends 2 lasers off, the
-// move, and on/off per laser: 7 commands. Command 3 + 7 * 40 + 3 is step 40's move.
-constexpr int kStep40Move = 3 + 7 * 40 + 3;
-
-TEST_F(EmulatedScan, BoardUnplugMidScanResumesToTheSameSession) {
-  fault_then_resume("unplug", {.unplug_at_command = kStep40Move}, {}, "usb 001:002 (2341:0043)",
-                    "unplugged");
-}
-
-TEST_F(EmulatedScan, StalledEndpointResumesToTheSameSession) {
-  fault_then_resume("stall", {.stall_at_command = kStep40Move + 2}, {}, "usb 001:002 (2341:0043)",
-                    "endpoint stalled");
-}
-
-TEST_F(EmulatedScan, MoveThatNeverCompletesResumesToTheSameSession) {
-  fault_then_resume("hang", {.hang_move_at_command = kStep40Move}, {}, "usb 001:002 (2341:0043)",
-                    "no 'ok' for 'G1 X");
-}
-
-TEST_F(EmulatedScan, CameraEioResumesToTheSameSession) {
-  fault_then_resume("eio", {}, {.eio_at_sequence = 150}, "/dev/video0", "I/O error (EIO)");
-}
-
-TEST_F(EmulatedScan, CameraUnplugResumesToTheSameSession) {
-  fault_then_resume("camunplug", {}, {.unplug_at_sequence = 300}, "/dev/video0", "unplugged");
-}
-
-TEST_F(EmulatedScan, LostAndGarbledOksAndDroppedFramesAreAbsorbed) {
-  const fs::path dir = scratch("absorbed");
-  Rig rig(0, {.drop_ok_at_command = kStep40Move + 1, .garble_ok_at_command = kStep40Move},
-          {.drop_sequences = {10, 11, 200}, .corrupt_sequences = {}});
-  const CaptureReport r = rig.scan(dir, 0);
-  EXPECT_EQ(r.steps_done, kSteps);
-  EXPECT_EQ(r.dropped_frames, 3u);
-  EXPECT_TRUE(test::sessions_identical(dir, *reference_));
   fs::remove_all(dir);
+}
+
+struct FaultCase {
+  const char* name;
+  sim::BoardFaults board;
+  sim::CameraFaults camera;
+  const char* device;
+  const char* problem;
+};
+
+// Board command numbers: 3 at connect (feed, G90, M17); each step sends 2 lasers off, the move,
+// and on/off per laser: 7 commands, so 3 + 7 * 10 + 3 is step 10's move. Camera frames: 6 per
+// step (each kept frame follows a discarded one).
+constexpr int kStep10Move = 3 + 7 * 10 + 3;
+
+TEST(EmulatedScan, EveryFaultNamesDeviceAndStepAndResumesToTheSameSession) {
+  const fs::path reference = scratch("reference");
+  {
+    Rig rig(0);
+    ASSERT_EQ(rig.scan(reference, 0, kFaultSteps).steps_done, kFaultSteps);
+  }
+  const char* usb = "usb 001:002 (2341:0043)";
+  const std::vector<FaultCase> cases = {
+      {"board unplug", {.unplug_at_command = kStep10Move}, {}, usb, "unplugged"},
+      {"stalled endpoint", {.stall_at_command = kStep10Move + 2}, {}, usb, "endpoint stalled"},
+      {"move never completes", {.hang_move_at_command = kStep10Move}, {}, usb, "no 'ok' for 'G1 X"},
+      {"camera EIO", {}, {.eio_at_sequence = 40}, "/dev/video0", "I/O error (EIO)"},
+      {"camera unplug", {}, {.unplug_at_sequence = 100}, "/dev/video0", "unplugged"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.name);
+    const fs::path dir = scratch("fault");
+    std::size_t failed_at = 0;
+    {
+      Rig rig(0, c.board, c.camera);
+      try {
+        rig.scan(dir, 0, kFaultSteps);
+        ADD_FAILURE() << "no error";
+      } catch (const DeviceError& e) {
+        const std::string what = e.what();
+        EXPECT_EQ(e.device(), c.device) << what;
+        EXPECT_NE(what.find(c.problem), std::string::npos) << what;
+        failed_at = read_session_manifest(dir).steps.size();
+        EXPECT_NE(what.find("step " + std::to_string(failed_at) + " of 30: "), std::string::npos)
+            << what;
+      }
+    }
+    EXPECT_GT(failed_at, 0u);
+    EXPECT_LT(failed_at, kFaultSteps);
+    const double angle = last_step_angle(dir);
+    Rig rig(angle);
+    const CaptureReport r = rig.scan(dir, angle, kFaultSteps);
+    EXPECT_EQ(r.first_step, failed_at);
+    EXPECT_EQ(r.steps_done, kFaultSteps);
+    EXPECT_TRUE(test::sessions_identical(dir, reference));
+    fs::remove_all(dir);
+  }
+  // Lost and garbled acknowledgements are retried, dropped frames counted: same session.
+  const fs::path dir = scratch("absorbed");
+  {
+    Rig rig(0, {.drop_ok_at_command = kStep10Move + 1, .garble_ok_at_command = kStep10Move},
+            {.drop_sequences = {10, 11, 50}});
+    const CaptureReport r = rig.scan(dir, 0, kFaultSteps);
+    EXPECT_EQ(r.steps_done, kFaultSteps);
+    EXPECT_EQ(r.dropped_frames, 3u);
+  }
+  EXPECT_TRUE(test::sessions_identical(dir, reference));
+  fs::remove_all(dir);
+  fs::remove_all(reference);
 }
 
 }  // namespace

@@ -16,6 +16,7 @@ TEST(HorusDialect, SpellsCommandsAsTheFirmwareExpects) {
   EXPECT_EQ(d->laser(1, false), "M70 T2");
   EXPECT_EQ(d->motor(true), "M17");
   EXPECT_EQ(d->motor(false), "M18");
+  EXPECT_EQ(d->set_position(12.5), "G92 X12.5");
   EXPECT_EQ(d->absolute_mode(), "G90");
   EXPECT_EQ(d->relative_mode(), "G91");
 }

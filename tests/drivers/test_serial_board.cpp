@@ -54,6 +54,36 @@ TEST(SerialBoard, ShutdownReleasesTheMotorEvenIfALaserIsRefused) {
   EXPECT_FALSE(rig.pty.firmware().motor_enabled());
 }
 
+// 30 steps per turn are 106.67 microsteps each: a resumed scan must round its targets exactly
+// as the uninterrupted one, so it declares its position in the firmware's coordinates.
+TEST(SerialBoard, DeclaredPositionLandsOnTheSameMicrostepsAsAnUninterruptedRun) {
+  const double step = 2 * std::numbers::pi / 30;
+  double uninterrupted = 0;
+  {
+    Rig rig;
+    Board board = rig.make_board();
+    board.connect();
+    for (int i = 1; i <= 20; ++i) board.move_to(i * step);
+    uninterrupted = rig.pty.firmware().angle_rad();
+  }
+  double first_run_end = 0;
+  {
+    Rig rig;
+    Board board = rig.make_board();
+    board.connect();
+    for (int i = 1; i <= 16; ++i) board.move_to(i * step);
+    first_run_end = rig.pty.firmware().angle_rad();
+  }
+  auto o = test::fast_board();
+  o.initial_angle_rad = first_run_end;  // the table stays where the first run left it
+  Rig rig(o);
+  Board board = rig.make_board();
+  board.connect();
+  board.declare_position(16 * step);
+  for (int i = 17; i <= 20; ++i) board.move_to(i * step);
+  EXPECT_EQ(rig.pty.firmware().angle_rad(), uninterrupted);
+}
+
 TEST(SerialBoard, RejectsUnknownFirmwareVersion) {
   auto o = test::fast_board();
   o.banner = "Horus 3.0 ['$' for help]";

@@ -145,6 +145,19 @@ void SimBoardFirmware::execute(const std::string& raw, Clock::time_point now) {
     respond("ok");
     return;
   }
+  if (cmd.starts_with("G92")) {
+    // Set position (grbl): the coordinate becomes X without moving the table.
+    const auto x = word(cmd, 'X', 3);
+    if (!x) {
+      respond("error: bad number");
+      return;
+    }
+    const long long physical = initial_steps_ + to_steps_;
+    to_steps_ = from_steps_ = std::llround(*x * options_.steps_per_revolution / 360.0);
+    initial_steps_ = physical - to_steps_;
+    respond("ok");
+    return;
+  }
   if (cmd == "G90" || cmd == "G91") {
     relative_ = cmd == "G91";
     respond("ok");

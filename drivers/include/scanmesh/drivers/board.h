@@ -34,6 +34,8 @@ class BoardDialect {
   virtual std::string absolute_mode() const = 0;
   virtual std::string relative_mode() const = 0;
   virtual std::string move(double degrees) const = 0;
+  //! Declares the current position to be `degrees` without moving.
+  virtual std::string set_position(double degrees) const = 0;
   virtual std::string laser(int index, bool on) const = 0;
   virtual std::string motor(bool enabled) const = 0;
   virtual std::string line_terminator() const { return "\r\n"; }
@@ -44,7 +46,8 @@ class BoardDialect {
 };
 
 //! Horus/Ciclop firmware (horus-fw, a grbl derivative): banner "Horus 0.2 ['$' for help]",
-//! "G1 F<deg/s>", "G90"/"G91", "G1 X<deg>", "M71 T<n>"/"M70 T<n>" (laser n on/off, n from 1),
+//! "G1 F<deg/s>", "G90"/"G91", "G1 X<deg>", "G92 X<deg>" (set position, grbl),
+//! "M71 T<n>"/"M70 T<n>" (laser n on/off, n from 1),
 //! "M17"/"M18", replies "ok" or "error: ...".
 std::unique_ptr<BoardDialect> make_horus_dialect();
 
@@ -72,9 +75,11 @@ class Board {
   void move_to(double angle_rad);
   //! Relative move by `delta_rad`; never retried (a repeat would turn twice).
   void move_by(double delta_rad);
-  //! Declares that the table stands at `angle_rad` now: later absolute moves are sent relative
-  //! to this origin. Used when resuming a scan (the firmware forgets its position on reset).
-  void set_origin(double angle_rad) { origin_rad_ = angle_rad_ = angle_rad; }
+  //! Declares that the table stands at `angle_rad` now (the firmware forgets its position on
+  //! reset). Used when resuming a scan. The firmware's own coordinate is set, not an offset in
+  //! the driver: the firmware rounds every absolute target to whole motor steps, and only with
+  //! the same coordinates does a resumed scan land on the same steps as an uninterrupted one.
+  void declare_position(double angle_rad);
   void set_laser(int index, bool on);
   void set_motor(bool enabled);
   void set_feed_rate(double deg_per_s);
@@ -95,7 +100,6 @@ class Board {
   BoardOptions options_;
   std::string banner_;
   double angle_rad_ = 0;
-  double origin_rad_ = 0;
   bool relative_ = false;
 };
 
