@@ -112,6 +112,28 @@ TEST(Session, DamagedFrameIsAFileFormatError) {
   fs::remove_all(dir);
 }
 
+TEST(Session, MjpegStorageKeepsTheCameraBytesUnchanged) {
+  const fs::path dir = scratch("mjpeg");
+  SessionHeader h = small_header(1);
+  h.storage = FrameStorage::Mjpeg;
+  h.camera.format = drivers::PixelFormat::Mjpeg;
+  const auto render = sim::synthetic_turntable_renderer(32, 24);
+  std::vector<drivers::Frame> frames;
+  for (unsigned mask : {0u, 1u, 2u}) {
+    drivers::Frame f;
+    f.original = sim::encode_mjpeg(render(0.5, mask), 85);
+    f.rgb = drivers::decode_frame(drivers::PixelFormat::Mjpeg, f.original, 32, 24);
+    frames.push_back(f);
+  }
+  SessionWriter w = SessionWriter::create(dir, h);
+  w.append_step(0, frames);
+  EXPECT_EQ(read_file_bytes(dir / "frames" / "000000_laser1.jpg"), frames[2].original);
+  const ScanStep s = SessionReader(dir).step(0);
+  EXPECT_EQ(s.laser_on[1].pixels, frames[2].rgb.pixels);
+  EXPECT_EQ(s.laser_off.pixels, frames[0].rgb.pixels);
+  fs::remove_all(dir);
+}
+
 TEST(Session, RefusesToOverwriteAnExistingSession) {
   const fs::path dir = scratch("exists");
   SessionWriter::create(dir, small_header());
