@@ -145,3 +145,8 @@ int run_reconstruct_from(const ScanStepSource& source, const ReconstructArgs& ar
 void register_vision_commands(CLI::App& app, CommandList& commands);
 
 }  // namespace scanmesh::cli
+
+// --- devices, scan sessions and replay: apps/src/cmd_devices.cpp ---
+namespace scanmesh::cli {
+void register_devices_commands(CLI::App& app, CommandList& commands);
+}  // namespace scanmesh::cli

@@ -186,6 +186,7 @@ int main(int argc, char** argv) {
   // Stages added later register their subcommands here, one line each (commands.h).
   CommandList commands;
   register_vision_commands(app, commands);
+  register_devices_commands(app, commands);
 
   try {
     app.parse(argc, argv);

@@ -1,0 +1,363 @@
+#include "scanmesh/acquisition/session.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <nlohmann/json.hpp>
+#include <numbers>
+
+#include "scanmesh/core/atomic_file.h"
+#include "scanmesh/core/binary_io.h"
+#include "scanmesh/core/errors.h"
+
+namespace scanmesh {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+constexpr const char* kFormatName = "scanmesh-session";
+constexpr std::size_t kMaxSteps = 1u << 20;
+constexpr int kMaxLasers = 8;
+
+std::string storage_name(FrameStorage s) { return s == FrameStorage::Png ? "png" : "mjpeg"; }
+
+std::uint32_t pixels_crc(const Image8& img) {
+  return crc32_of(img.pixels.data(), img.pixels.size());
+}
+
+void fsync_path(const fs::path& p, bool directory) {
+  const int fd = ::open(p.c_str(), (directory ? O_RDONLY | O_DIRECTORY : O_RDONLY) | O_CLOEXEC);
+  if (fd < 0) return;
+  ::fsync(fd);
+  ::close(fd);
+}
+
+std::string frame_file_name(std::size_t step, std::size_t k, FrameStorage storage) {
+  char name[64];
+  const char* ext = storage == FrameStorage::Png ? "png" : "jpg";
+  if (k == 0)
+    std::snprintf(name, sizeof name, "frames/%06zu_off.%s", step, ext);
+  else
+    std::snprintf(name, sizeof name, "frames/%06zu_laser%zu.%s", step, k - 1, ext);
+  return name;
+}
+
+// Typed getters that turn every json type or range problem into a FileFormatError.
+template <typename T>
+T get(const json& j, const char* key, const fs::path& file) {
+  if (!j.is_object() || !j.contains(key))
+    throw FileFormatError(file, std::string("missing field '") + key + "'");
+  try {
+    return j.at(key).get<T>();
+  } catch (const json::exception&) {
+    throw FileFormatError(file, std::string("field '") + key + "' has the wrong type");
+  }
+}
+
+drivers::CameraDescriptor camera_from_json(const json& j, const fs::path& file) {
+  drivers::CameraDescriptor c;
+  c.path = get<std::string>(j, "path", file);
+  c.card = get<std::string>(j, "card", file);
+  c.driver = get<std::string>(j, "driver", file);
+  c.bus_info = get<std::string>(j, "bus_info", file);
+  c.width = get<int>(j, "width", file);
+  c.height = get<int>(j, "height", file);
+  c.fps = get<double>(j, "fps", file);
+  try {
+    c.format = drivers::parse_pixel_format(get<std::string>(j, "format", file));
+  } catch (const InvalidInputError& e) {
+    throw FileFormatError(file, e.what());
+  }
+  if (c.width <= 0 || c.height <= 0 || c.width > 16384 || c.height > 16384)
+    throw FileFormatError(file, "camera size is impossible");
+  return c;
+}
+
+StepRecord step_from_json(const json& j, const SessionHeader& h, const fs::path& file) {
+  StepRecord s;
+  const auto index = get<std::int64_t>(j, "step", file);
+  if (index < 0 || static_cast<std::size_t>(index) >= h.step_count)
+    throw FileFormatError(file, "step index " + std::to_string(index) + " out of range");
+  s.index = static_cast<std::size_t>(index);
+  s.angle_rad = get<double>(j, "angle_rad", file);
+  if (!std::isfinite(s.angle_rad)) throw FileFormatError(file, "angle is not finite");
+  const json frames = get<json>(j, "frames", file);
+  if (!frames.is_array() || frames.size() != static_cast<std::size_t>(h.laser_count) + 1)
+    throw FileFormatError(file, "step " + std::to_string(index) + " must have " +
+                                    std::to_string(h.laser_count + 1) + " frames");
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    const json& f = frames[k];
+    FrameRecord r;
+    r.lasers = get<unsigned>(f, "lasers", file);
+    const unsigned expected = k == 0 ? 0u : 1u << (k - 1);
+    if (r.lasers != expected)
+      throw FileFormatError(file, "step " + std::to_string(index) + " frame " + std::to_string(k) +
+                                      " has the wrong laser state");
+    r.file = get<std::string>(f, "file", file);
+    if (r.file != frame_file_name(s.index, k, h.storage))
+      throw FileFormatError(file, "step " + std::to_string(index) + " names frame file '" +
+                                      r.file.substr(0, 64) + "'");
+    r.rgb_crc32 = get<std::uint32_t>(f, "rgb_crc32", file);
+    if (f.contains("capture")) {
+      const json& c = f.at("capture");
+      r.sequence = get<std::uint32_t>(c, "sequence", file);
+      r.timestamp_s = get<double>(c, "timestamp_s", file);
+      r.dropped_before = get<std::uint32_t>(c, "dropped_before", file);
+    }
+    s.frames.push_back(std::move(r));
+  }
+  return s;
+}
+
+}  // namespace
+
+double SessionHeader::step_angle(std::size_t i) const {
+  return start_angle_rad +
+         2.0 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(step_count);
+}
+
+std::string header_to_json(const SessionHeader& h) {
+  json j;
+  j["format"] = kFormatName;
+  j["version"] = h.version;
+  j["step_count"] = h.step_count;
+  j["laser_count"] = h.laser_count;
+  j["frame_storage"] = storage_name(h.storage);
+  j["start_angle_rad"] = h.start_angle_rad;
+  j["settle_s"] = h.settle_s;
+  j["discard_frames"] = h.discard_frames;
+  j["camera"] = {{"path", h.camera.path},
+                 {"card", h.camera.card},
+                 {"driver", h.camera.driver},
+                 {"bus_info", h.camera.bus_info},
+                 {"width", h.camera.width},
+                 {"height", h.camera.height},
+                 {"format", drivers::to_string(h.camera.format)},
+                 {"fps", h.camera.fps}};
+  j["board"] = {
+      {"device", h.board_device}, {"dialect", h.board_dialect}, {"firmware", h.board_firmware}};
+  j["simulated"] = h.simulated;
+  j["notes"] = h.notes;
+  return j.dump(2) + "\n";
+}
+
+std::string step_to_json_line(const StepRecord& s) {
+  json frames = json::array();
+  for (const auto& f : s.frames)
+    frames.push_back({{"lasers", f.lasers},
+                      {"file", f.file},
+                      {"rgb_crc32", f.rgb_crc32},
+                      {"capture",
+                       {{"sequence", f.sequence},
+                        {"timestamp_s", f.timestamp_s},
+                        {"dropped_before", f.dropped_before}}}});
+  json j = {{"step", s.index}, {"angle_rad", s.angle_rad}, {"frames", frames}};
+  return j.dump() + "\n";
+}
+
+SessionManifest parse_session_manifest(std::string_view header_json, std::string_view steps_jsonl,
+                                       const fs::path& folder) {
+  const fs::path header_file = folder / "session.json";
+  const fs::path steps_file = folder / "steps.jsonl";
+  SessionManifest m;
+  json h = json::parse(header_json, nullptr, false);
+  if (h.is_discarded() || !h.is_object()) throw FileFormatError(header_file, "not a JSON object");
+  if (get<std::string>(h, "format", header_file) != kFormatName)
+    throw FileFormatError(header_file, "not a scanmesh session");
+  SessionHeader& hd = m.header;
+  hd.version = get<int>(h, "version", header_file);
+  if (hd.version != 1)
+    throw FileFormatError(header_file, "session version " + std::to_string(hd.version) +
+                                           " is not supported (this build reads 1)");
+  const auto steps = get<std::int64_t>(h, "step_count", header_file);
+  if (steps < 1 || static_cast<std::uint64_t>(steps) > kMaxSteps)
+    throw FileFormatError(header_file, "step_count must be 1.." + std::to_string(kMaxSteps));
+  hd.step_count = static_cast<std::size_t>(steps);
+  hd.laser_count = get<int>(h, "laser_count", header_file);
+  if (hd.laser_count < 0 || hd.laser_count > kMaxLasers)
+    throw FileFormatError(header_file, "laser_count must be 0..8");
+  const auto storage = get<std::string>(h, "frame_storage", header_file);
+  if (storage != "png" && storage != "mjpeg")
+    throw FileFormatError(header_file, "frame_storage must be png or mjpeg");
+  hd.storage = storage == "png" ? FrameStorage::Png : FrameStorage::Mjpeg;
+  hd.start_angle_rad = get<double>(h, "start_angle_rad", header_file);
+  hd.settle_s = get<double>(h, "settle_s", header_file);
+  hd.discard_frames = get<int>(h, "discard_frames", header_file);
+  hd.camera = camera_from_json(get<json>(h, "camera", header_file), header_file);
+  const json board = get<json>(h, "board", header_file);
+  hd.board_device = get<std::string>(board, "device", header_file);
+  hd.board_dialect = get<std::string>(board, "dialect", header_file);
+  hd.board_firmware = get<std::string>(board, "firmware", header_file);
+  hd.simulated = get<bool>(h, "simulated", header_file);
+  hd.notes = get<std::string>(h, "notes", header_file);
+
+  std::size_t pos = 0;
+  while (pos < steps_jsonl.size()) {
+    const std::size_t nl = steps_jsonl.find('\n', pos);
+    if (nl == std::string_view::npos) break;  // torn last line: the step never completed
+    const std::string_view line = steps_jsonl.substr(pos, nl - pos);
+    const std::string where = "line " + std::to_string(m.steps.size() + 1);
+    json j = json::parse(line, nullptr, false);
+    if (j.is_discarded()) throw FileFormatError(steps_file, where + " is not JSON");
+    StepRecord s = step_from_json(j, hd, steps_file);
+    if (s.index != m.steps.size())
+      throw FileFormatError(steps_file, where + " is step " + std::to_string(s.index) +
+                                            ", expected " + std::to_string(m.steps.size()));
+    m.steps.push_back(std::move(s));
+    pos = nl + 1;
+    m.complete_bytes = pos;
+  }
+  return m;
+}
+
+SessionManifest read_session_manifest(const fs::path& folder) {
+  if (!fs::exists(folder / "session.json"))
+    throw FileFormatError(folder, "not a session folder (no session.json)");
+  const auto header = read_file_bytes(folder / "session.json");
+  std::vector<std::uint8_t> steps;
+  if (fs::exists(folder / "steps.jsonl")) steps = read_file_bytes(folder / "steps.jsonl");
+  return parse_session_manifest(
+      std::string_view(reinterpret_cast<const char*>(header.data()), header.size()),
+      std::string_view(reinterpret_cast<const char*>(steps.data()), steps.size()), folder);
+}
+
+SessionWriter::SessionWriter(fs::path folder, SessionHeader header, std::size_t done)
+    : folder_(std::move(folder)), header_(std::move(header)), steps_done_(done) {}
+
+SessionWriter SessionWriter::create(const fs::path& folder, const SessionHeader& header) {
+  if (header.step_count < 1 || header.step_count > kMaxSteps)
+    throw InvalidInputError("step count must be 1.." + std::to_string(kMaxSteps));
+  if (header.laser_count < 0 || header.laser_count > kMaxLasers)
+    throw InvalidInputError("laser count must be 0..8");
+  std::error_code ec;
+  if (fs::exists(folder / "session.json"))
+    throw InvalidInputError("'" + folder.string() +
+                            "' already holds a session; continue it with --resume");
+  fs::create_directories(folder / "frames", ec);
+  if (ec) throw IoError("cannot create '" + (folder / "frames").string() + "': " + ec.message());
+  // steps.jsonl first (empty), session.json last: a folder with session.json is a session.
+  write_file_atomically(folder / "steps.jsonl", std::string_view());
+  write_file_atomically(folder / "session.json", header_to_json(header));
+  fsync_path(folder, true);
+  // Round trip through the parser so what is recorded is what a reader will see.
+  return SessionWriter(folder, read_session_manifest(folder).header, 0);
+}
+
+SessionWriter SessionWriter::resume(const fs::path& folder) {
+  SessionManifest m = read_session_manifest(folder);
+  const fs::path steps = folder / "steps.jsonl";
+  std::error_code ec;
+  if (fs::exists(steps) && fs::file_size(steps) != m.complete_bytes) {
+    // A torn last line: the step it describes is captured again.
+    fs::resize_file(steps, m.complete_bytes, ec);
+    if (ec) throw IoError("cannot truncate '" + steps.string() + "': " + ec.message());
+    fsync_path(steps, false);
+  }
+  // Orphan frames of the interrupted step and temporary files of an interrupted write.
+  for (const auto& entry : fs::directory_iterator(folder / "frames", ec)) {
+    const std::string name = entry.path().filename().string();
+    const bool temp = name.starts_with(".");
+    std::size_t step = 0;
+    const bool numbered = std::sscanf(name.c_str(), "%zu_", &step) == 1;
+    if (temp || (numbered && step >= m.steps.size())) fs::remove(entry.path(), ec);
+  }
+  return SessionWriter(folder, m.header, m.steps.size());
+}
+
+void SessionWriter::append_step(double angle_rad, const std::vector<drivers::Frame>& frames) {
+  if (complete()) throw InvalidInputError("the session already has all its steps");
+  if (frames.size() != static_cast<std::size_t>(header_.laser_count) + 1)
+    throw InvalidInputError("a step needs " + std::to_string(header_.laser_count + 1) + " frames");
+  StepRecord record;
+  record.index = steps_done_;
+  record.angle_rad = angle_rad;
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    const drivers::Frame& f = frames[k];
+    if (f.rgb.width != header_.camera.width || f.rgb.height != header_.camera.height)
+      throw InvalidInputError("frame size differs from the session's camera size");
+    FrameRecord r;
+    r.lasers = k == 0 ? 0u : 1u << (k - 1);
+    r.file = frame_file_name(record.index, k, header_.storage);
+    r.rgb_crc32 = pixels_crc(f.rgb);
+    r.sequence = f.sequence;
+    r.timestamp_s = f.timestamp_s;
+    r.dropped_before = f.dropped_before;
+    const fs::path path = folder_ / r.file;
+    if (header_.storage == FrameStorage::Mjpeg) {
+      if (f.original.empty())
+        throw InvalidInputError("MJPEG storage needs the camera's MJPEG bytes");
+      write_file_atomically(path, std::span<const std::uint8_t>(f.original));
+    } else {
+      write_png(path, f.rgb);
+    }
+    record.frames.push_back(std::move(r));
+  }
+  fsync_path(folder_ / "frames", true);
+  const std::string line = step_to_json_line(record);
+  const fs::path steps = folder_ / "steps.jsonl";
+  const int fd = ::open(steps.c_str(), O_WRONLY | O_APPEND | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0) throw IoError("cannot open '" + steps.string() + "': " + std::strerror(errno));
+  std::size_t done = 0;
+  while (done < line.size()) {
+    const ssize_t n = ::write(fd, line.data() + done, line.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int e = errno;
+      ::close(fd);
+      throw IoError("cannot append to '" + steps.string() + "': " + std::strerror(e));
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  if (::fsync(fd) != 0) {
+    const int e = errno;
+    ::close(fd);
+    throw IoError("cannot fsync '" + steps.string() + "': " + std::strerror(e));
+  }
+  ::close(fd);
+  ++steps_done_;
+}
+
+SessionReader::SessionReader(const fs::path& folder)
+    : folder_(folder), manifest_(read_session_manifest(folder)) {}
+
+Image8 SessionReader::frame(std::size_t step, std::size_t k) const {
+  if (step >= manifest_.steps.size() || k >= manifest_.steps[step].frames.size())
+    throw InvalidInputError("no frame " + std::to_string(k) + " in step " + std::to_string(step));
+  const FrameRecord& r = manifest_.steps[step].frames[k];
+  const fs::path path = folder_ / r.file;
+  Image8 img;
+  if (manifest_.header.storage == FrameStorage::Png) {
+    img = read_png(path);
+  } else {
+    const auto bytes = read_file_bytes(path);
+    img = drivers::decode_frame(drivers::PixelFormat::Mjpeg, bytes, manifest_.header.camera.width,
+                                manifest_.header.camera.height, 0, path.string());
+  }
+  if (img.width != manifest_.header.camera.width || img.height != manifest_.header.camera.height ||
+      img.channels != 3)
+    throw FileFormatError(path, "frame size or channels differ from session.json");
+  if (pixels_crc(img) != r.rgb_crc32)
+    throw FileFormatError(path, "frame content does not match its CRC in steps.jsonl");
+  return img;
+}
+
+ScanStep SessionReader::step(std::size_t i) const {
+  if (i >= manifest_.steps.size())
+    throw InvalidInputError("step " + std::to_string(i) + " is not in the session (" +
+                            std::to_string(manifest_.steps.size()) + " recorded)");
+  const StepRecord& r = manifest_.steps[i];
+  ScanStep s;
+  s.index = r.index;
+  s.angle_rad = r.angle_rad;
+  s.timestamp_s = r.frames.front().timestamp_s;
+  s.laser_off = frame(i, 0);
+  for (std::size_t k = 1; k < r.frames.size(); ++k) s.laser_on.push_back(frame(i, k));
+  return s;
+}
+
+}  // namespace scanmesh

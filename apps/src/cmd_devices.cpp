@@ -1,0 +1,381 @@
+// Device subcommands: `scanmesh devices` (discovery), `scanmesh scan` (capture a session from
+// real or simulated devices, resumable), `scanmesh replay` (verify and export a session).
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <thread>
+
+#include "cli_support.h"
+#include "commands.h"
+#include "scanmesh/acquisition/capture.h"
+#include "scanmesh/acquisition/session.h"
+#include "scanmesh/core/atomic_file.h"
+#include "scanmesh/core/errors.h"
+#include "scanmesh/drivers/board.h"
+#include "scanmesh/drivers/camera.h"
+#include "scanmesh/drivers/serial_transport.h"
+#include "scanmesh/drivers/usb_transport.h"
+#include "sim_rig.h"
+
+namespace scanmesh::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct DevicesArgs {
+  bool json = false;
+};
+
+struct ScanArgs {
+  std::string device, board, scene, out;
+  bool sim = false, resume = false;
+  int steps = 400, lasers = 2;
+  std::string format;  // default: rgb24 in simulation, yuyv on hardware
+  std::string size = "640x480";
+  double fps = 30;
+  std::string io = "mmap";
+  int buffers = 4;
+  std::optional<int> exposure, gain, brightness;
+  double settle_s = 0.2;
+  int discard = 1;
+  std::string storage = "png";
+  double feed = 90;
+  int baud = 115200;
+  double time_scale = 1.0;
+  std::vector<std::string> faults;
+};
+
+struct ReplayArgs {
+  std::string session, out;
+  bool frames = false;
+  int sheet_columns = 10;
+};
+
+std::vector<std::string> tty_nodes() {
+  std::vector<std::string> nodes;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator("/dev", ec)) {
+    const std::string n = e.path().filename().string();
+    if (n.starts_with("ttyUSB") || n.starts_with("ttyACM")) nodes.push_back(e.path().string());
+  }
+  std::sort(nodes.begin(), nodes.end());
+  return nodes;
+}
+
+int run_devices(const DevicesArgs& args) {
+  const auto cameras = drivers::list_cameras();
+  const auto boards = drivers::list_usb_boards();
+  const auto ttys = tty_nodes();
+  char id[16];
+  if (args.json) {
+    nlohmann::json j;
+    j["cameras"] = nlohmann::json::array();
+    for (const auto& c : cameras)
+      j["cameras"].push_back({{"path", c.path},
+                              {"card", c.card},
+                              {"driver", c.driver},
+                              {"bus", c.bus_info},
+                              {"formats", c.all_formats}});
+    j["usb_boards"] = nlohmann::json::array();
+    for (const auto& b : boards) {
+      std::snprintf(id, sizeof id, "%04x:%04x", b.vendor_id, b.product_id);
+      j["usb_boards"].push_back(
+          {{"bus", b.bus}, {"address", b.address}, {"id", id}, {"kind", b.kind}});
+    }
+    j["tty"] = ttys;
+    std::cout << j.dump(2) << "\n";
+    return kSuccess;
+  }
+  std::cout << "cameras:\n";
+  if (cameras.empty()) std::cout << "  (none)\n";
+  for (const auto& c : cameras) {
+    std::string formats;
+    for (const auto& f : c.all_formats) formats += (formats.empty() ? "" : " ") + f;
+    std::cout << "  " << c.path << "  '" << c.card << "'  bus " << c.bus_info << "  formats "
+              << formats << "\n";
+  }
+  std::cout << "boards (USB):\n";
+  if (boards.empty()) std::cout << "  (none)\n";
+  for (const auto& b : boards) {
+    std::snprintf(id, sizeof id, "%04x:%04x", b.vendor_id, b.product_id);
+    std::cout << "  usb:" << b.bus << ":" << b.address << "  " << id << "  " << b.kind << "\n";
+  }
+  std::cout << "boards (tty):\n";
+  if (ttys.empty()) std::cout << "  (none)\n";
+  for (const auto& t : ttys) std::cout << "  " << t << "\n";
+  return kSuccess;
+}
+
+std::pair<int, int> parse_size(const std::string& s) {
+  int w = 0, h = 0;
+  char tail = 0;
+  if (std::sscanf(s.c_str(), "%dx%d%c", &w, &h, &tail) != 2 || w < 8 || h < 8 || w > 8192 ||
+      h > 8192 || w % 2 != 0)
+    throw InvalidInputError("--size '" + s + "' must be WIDTHxHEIGHT (even width, 8..8192)");
+  return {w, h};
+}
+
+std::unique_ptr<drivers::Transport> open_board_transport(const std::string& board, int baud) {
+  if (board.starts_with("/")) return drivers::open_serial_transport(board, baud);
+  drivers::UsbSerialOptions o = drivers::parse_usb_board_spec(board);
+  o.baud = baud;
+  return drivers::open_usb_transport(o);
+}
+
+int run_scan(const ScanArgs& a) {
+  if (a.out.empty()) throw InvalidInputError("--out SESSION is required");
+  if (a.sim == (!a.device.empty() || !a.board.empty()))
+    throw InvalidInputError("give either --sim or both --device and --board");
+  if (!a.sim && (a.device.empty() || a.board.empty()))
+    throw InvalidInputError("a hardware scan needs --device CAM and --board BOARD");
+  if (!a.faults.empty() && !a.sim) throw InvalidInputError("--sim-fault needs --sim");
+  if (a.steps < 1 || a.steps > 100000) throw InvalidInputError("--steps must be 1..100000");
+  if (a.lasers < 0 || a.lasers > 2) throw InvalidInputError("--lasers must be 0, 1 or 2");
+  if (!(a.time_scale > 0) || a.time_scale > 1)
+    throw InvalidInputError("--time-scale must be in (0, 1]");
+  const auto [width, height] = parse_size(a.size);
+  const drivers::PixelFormat format =
+      drivers::parse_pixel_format(a.format.empty() ? (a.sim ? "rgb24" : "yuyv") : a.format);
+  if (a.storage != "png" && a.storage != "mjpeg")
+    throw InvalidInputError("--storage must be png or mjpeg");
+  const FrameStorage storage = a.storage == "png" ? FrameStorage::Png : FrameStorage::Mjpeg;
+  if (storage == FrameStorage::Mjpeg && format != drivers::PixelFormat::Mjpeg)
+    throw InvalidInputError("--storage mjpeg keeps the camera's MJPEG bytes: needs --format mjpeg");
+
+  // The session: new, or continued from its last complete step.
+  const fs::path out = a.out;
+  const bool existing = fs::exists(out / "session.json");
+  if (existing && !a.resume)
+    throw InvalidInputError("'" + out.string() + "' already holds a session; add --resume");
+  std::optional<SessionWriter> session;
+  double table_angle = 0;  // where the table stands now (the last complete step)
+  if (existing) {
+    session.emplace(SessionWriter::resume(out));
+    const SessionHeader& h = session->header();
+    if (h.step_count != static_cast<std::size_t>(a.steps) || h.laser_count != a.lasers ||
+        h.camera.width != width || h.camera.height != height || h.camera.format != format ||
+        h.storage != storage || h.simulated != a.sim)
+      throw InvalidInputError(
+          "--resume: steps, lasers, size, format, storage and --sim must "
+          "match the session in '" +
+          out.string() + "'");
+    if (session->complete()) {
+      std::cout << "scan: " << out.string() << " is already complete (" << h.step_count
+                << " steps)\n";
+      return kSuccess;
+    }
+    if (session->steps_done() > 0) table_angle = h.step_angle(session->steps_done() - 1);
+  }
+
+  // Devices.
+  std::unique_ptr<sim::PtyBoard> pty;
+  std::shared_ptr<sim::SimCamera> sim_camera;
+  std::unique_ptr<drivers::Camera> camera;
+  const double scale = a.sim ? a.time_scale : 1.0;
+  drivers::BoardOptions board_options;
+  board_options.feed_rate_deg_per_s = a.feed;
+  if (a.sim) {
+    sim::SimBoardOptions bo;
+    bo.time_scale = scale;
+    bo.laser_count = std::max(a.lasers, 1);
+    bo.initial_angle_rad = table_angle;
+    sim::SimCameraOptions co;
+    co.width = width;
+    co.height = height;
+    co.fps = a.fps;
+    co.time_scale = scale;
+    for (const auto& f : a.faults) apply_sim_fault(f, bo, co);
+    pty = std::make_unique<sim::PtyBoard>(bo);
+    auto firmware = pty->shared_firmware();
+    sim_camera = std::make_shared<sim::SimCamera>(
+        make_sim_renderer(a.scene, width, height), [firmware] { return firmware->angle_rad(); },
+        [firmware] { return firmware->laser_mask(); }, co);
+    sim_camera->start_streaming();
+    camera = std::make_unique<SimCameraSource>(sim_camera, format, 2.0);
+    // Timeouts shrink with the simulated time, but not below what a loaded machine needs.
+    board_options.banner_timeout = std::chrono::milliseconds(3000);
+    board_options.command_timeout = std::chrono::milliseconds(500);
+    board_options.move_timeout_floor = std::chrono::milliseconds(1000);
+  } else {
+    drivers::CameraSettings cs;
+    cs.width = width;
+    cs.height = height;
+    cs.format = format;
+    cs.fps = a.fps;
+    cs.io = a.io == "userptr" ? drivers::IoMethod::UserPtr : drivers::IoMethod::Mmap;
+    if (a.io != "mmap" && a.io != "userptr")
+      throw InvalidInputError("--io must be mmap or userptr");
+    cs.buffer_count = a.buffers;
+    cs.exposure = a.exposure;
+    cs.gain = a.gain;
+    cs.brightness = a.brightness;
+    camera = std::make_unique<drivers::V4l2Camera>(a.device, cs);
+  }
+  drivers::Board board(open_board_transport(a.sim ? pty->slave_path() : a.board, a.baud),
+                       drivers::make_horus_dialect(), board_options);
+  board.connect();
+  // A resumed scan continues where the table was left (docs/hardware.md).
+  if (session && session->steps_done() > 0) board.declare_position(table_angle);
+
+  if (!session) {
+    SessionHeader h;
+    h.step_count = static_cast<std::size_t>(a.steps);
+    h.laser_count = a.lasers;
+    h.storage = storage;
+    h.settle_s = a.settle_s;
+    h.discard_frames = a.discard;
+    h.camera = camera->descriptor();
+    h.board_device = a.sim ? "sim:board" : board.device_name();
+    h.board_dialect = board.dialect().name();
+    h.board_firmware = board.firmware_banner();
+    h.simulated = a.sim;
+    if (a.sim) h.notes = "synthetic turntable renderer, time scale " + std::to_string(scale);
+    session.emplace(SessionWriter::create(out, h));
+  }
+
+  Progress progress("scan");
+  CaptureOptions options;
+  options.settle_s = a.settle_s * scale;
+  options.discard_frames = a.discard;
+  options.progress = [&](std::size_t done, std::size_t total) {
+    progress.update(static_cast<int>(done), static_cast<int>(total));
+  };
+  const CaptureReport report = capture_steps(*session, board, *camera, options);
+  progress.finish();
+  std::cout << "scan: " << report.steps_done << " steps (" << report.steps_done - report.first_step
+            << " captured now";
+  if (report.first_step > 0) std::cout << ", resumed at step " << report.first_step;
+  std::cout << ") in " << report.seconds << " s, " << report.dropped_frames << " frames dropped -> "
+            << out.string() << "\n";
+  return kSuccess;
+}
+
+Image8 downscale(const Image8& img, int factor) {
+  Image8 out(std::max(1, img.width / factor), std::max(1, img.height / factor), 3);
+  for (int y = 0; y < out.height; ++y)
+    for (int x = 0; x < out.width; ++x)
+      for (int c = 0; c < 3; ++c) {
+        int sum = 0;
+        for (int dy = 0; dy < factor; ++dy)
+          for (int dx = 0; dx < factor; ++dx) sum += img.at(x * factor + dx, y * factor + dy)[c];
+        out.at(x, y)[c] = static_cast<std::uint8_t>(sum / (factor * factor));
+      }
+  return out;
+}
+
+int run_replay(const ReplayArgs& a) {
+  if (a.out.empty()) throw InvalidInputError("--out DIR is required");
+  if (a.sheet_columns < 1 || a.sheet_columns > 100)
+    throw InvalidInputError("--columns must be 1..100");
+  const SessionReader reader(a.session);
+  const fs::path out = a.out;
+  std::error_code ec;
+  fs::create_directories(out, ec);
+  if (ec) throw IoError("cannot create '" + out.string() + "': " + ec.message());
+  const auto& header = reader.manifest().header;
+  const std::size_t n = reader.step_count();
+  // Contact sheet: one tile per step, the frame with every laser's line (the max over the
+  // laser-on frames), a quarter of the size (or less for big frames).
+  const int factor = std::max(1, header.camera.width / 160);
+  const int tw = std::max(1, header.camera.width / factor),
+            th = std::max(1, header.camera.height / factor);
+  const int cols = static_cast<int>(std::min<std::size_t>(n, a.sheet_columns));
+  const int rows = static_cast<int>((n + cols - 1) / std::max(cols, 1));
+  Image8 sheet(std::max(cols, 1) * tw, std::max(rows, 1) * th, 3, 0);
+  Progress progress("replay");
+  nlohmann::json steps = nlohmann::json::array();
+  for (std::size_t i = 0; i < n; ++i) {
+    const ScanStep s = reader.step(i);  // checks every frame's CRC
+    Image8 combined = s.laser_off;
+    for (const auto& on : s.laser_on)
+      for (std::size_t p = 0; p < combined.pixels.size(); ++p)
+        combined.pixels[p] = std::max(combined.pixels[p], on.pixels[p]);
+    const Image8 tile = downscale(combined, factor);
+    const int ox = static_cast<int>(i % cols) * tw, oy = static_cast<int>(i / cols) * th;
+    for (int y = 0; y < tile.height && y < th; ++y)
+      for (int x = 0; x < tile.width && x < tw; ++x)
+        std::copy_n(tile.at(x, y), 3, sheet.at(ox + x, oy + y));
+    if (a.frames) {
+      char name[64];
+      std::snprintf(name, sizeof name, "step_%06zu_off.png", i);
+      write_png(out / name, s.laser_off);
+      for (std::size_t k = 0; k < s.laser_on.size(); ++k) {
+        std::snprintf(name, sizeof name, "step_%06zu_laser%zu.png", i, k);
+        write_png(out / name, s.laser_on[k]);
+      }
+    }
+    steps.push_back({{"step", s.index}, {"angle_deg", s.angle_rad * 180.0 / std::numbers::pi}});
+    progress.update(static_cast<int>(i + 1), static_cast<int>(n));
+  }
+  progress.finish();
+  write_png(out / "contact_sheet.png", sheet);
+  nlohmann::json report = {{"session", fs::absolute(a.session).string()},
+                           {"steps_recorded", n},
+                           {"steps_planned", header.step_count},
+                           {"complete", reader.complete()},
+                           {"lasers", header.laser_count},
+                           {"frames_verified", n * (header.laser_count + 1)},
+                           {"camera", header.camera.card},
+                           {"board_firmware", header.board_firmware},
+                           {"steps", steps}};
+  write_file_atomically(out / "replay.json", report.dump(2) + "\n");
+  std::cout << "replay: " << n << " of " << header.step_count << " steps, "
+            << n * (header.laser_count + 1) << " frames verified -> " << out.string() << "\n";
+  return kSuccess;
+}
+
+}  // namespace
+
+void register_devices_commands(CLI::App& app, CommandList& commands) {
+  auto dargs = std::make_shared<DevicesArgs>();
+  CLI::App* devices = app.add_subcommand("devices", "List cameras and scanner boards");
+  devices->add_flag("--json", dargs->json, "Machine-readable output");
+  commands.push_back({devices, [dargs] { return run_devices(*dargs); }});
+
+  auto s = std::make_shared<ScanArgs>();
+  CLI::App* scan = app.add_subcommand("scan", "Capture a turntable scan into a session folder");
+  scan->add_option("--device", s->device, "Camera: /dev/videoN or its card name");
+  scan->add_option("--board", s->board, "Board: /dev/ttyACM0, VID:PID or usb:BUS:ADDR");
+  scan->add_flag("--sim", s->sim, "Use the simulated board and camera");
+  scan->add_option("--scene", s->scene, "Scene YAML for the simulated camera")
+      ->check(CLI::ExistingFile);
+  scan->add_option("--steps", s->steps, "Turntable steps per turn")->capture_default_str();
+  scan->add_option("--lasers", s->lasers, "Lasers (0..2)")->capture_default_str();
+  scan->add_option("--out", s->out, "Session folder")->required();
+  scan->add_flag("--resume", s->resume, "Continue the session in --out from its last step");
+  scan->add_option("--format", s->format, "yuyv | mjpeg | rgb24");
+  scan->add_option("--size", s->size, "Frame size WIDTHxHEIGHT")->capture_default_str();
+  scan->add_option("--fps", s->fps, "Frame rate")->capture_default_str();
+  scan->add_option("--io", s->io, "V4L2 streaming: mmap | userptr")->capture_default_str();
+  scan->add_option("--buffers", s->buffers, "V4L2 buffers")->capture_default_str();
+  scan->add_option("--exposure", s->exposure, "Manual exposure (100 us units)");
+  scan->add_option("--gain", s->gain, "Gain");
+  scan->add_option("--brightness", s->brightness, "Brightness");
+  scan->add_option("--settle", s->settle_s, "Wait after each move, seconds")->capture_default_str();
+  scan->add_option("--discard", s->discard, "Frames discarded after a laser switch")
+      ->capture_default_str();
+  scan->add_option("--storage", s->storage, "png (lossless) | mjpeg (camera bytes)")
+      ->capture_default_str();
+  scan->add_option("--feed", s->feed, "Turntable speed, degrees per second")->capture_default_str();
+  scan->add_option("--baud", s->baud, "Serial baud rate")->capture_default_str();
+  scan->add_option("--time-scale", s->time_scale,
+                   "Simulation: simulated time per real second (0.01 = 100x faster)")
+      ->capture_default_str();
+  scan->add_option("--sim-fault", s->faults, "Simulation fault KIND@N (repeatable)");
+  commands.push_back({scan, [s] { return run_scan(*s); }});
+
+  auto r = std::make_shared<ReplayArgs>();
+  CLI::App* replay = app.add_subcommand("replay", "Verify a session and export its frames");
+  replay->add_option("session", r->session, "Session folder")->required();
+  replay->add_option("--out", r->out, "Output folder")->required();
+  replay->add_flag("--frames", r->frames, "Also export every frame as PNG");
+  replay->add_option("--columns", r->sheet_columns, "Contact sheet columns")->capture_default_str();
+  commands.push_back({replay, [r] { return run_replay(*r); }});
+}
+
+}  // namespace scanmesh::cli

@@ -1,0 +1,37 @@
+// Private state of EmulatedDevices shared by the USB and V4L2 halves.
+#pragma once
+
+#include <umockdev.h>
+
+#include <deque>
+#include <list>
+#include <mutex>
+#include <vector>
+
+#include "scanmesh/sim/emulated_devices.h"
+
+namespace scanmesh::sim {
+
+struct UsbBoardEmulation {
+  std::shared_ptr<SimBoardFirmware> firmware;
+  UMockdevIoctlBase* handler = nullptr;
+  std::mutex mutex;
+  EmulatedUsbBoardState state;
+  std::vector<UMockdevIoctlData*> done;     //!< completed URBs waiting to be reaped
+  std::list<UMockdevIoctlData*> in_flight;  //!< bulk IN URBs waiting for firmware output
+  std::string unread;                       //!< firmware output not yet placed in a URB
+};
+
+struct CameraEmulation;
+
+struct EmulatedDevices::Impl {
+  UMockdevTestbed* testbed = nullptr;
+  std::vector<std::unique_ptr<UsbBoardEmulation>> boards;
+  std::vector<CameraEmulation*> cameras;  // owned; freed by destroy_camera_emulation
+  ~Impl();
+};
+
+//! Defined in emulated_v4l2.cpp.
+void destroy_camera_emulation(CameraEmulation* camera);
+
+}  // namespace scanmesh::sim

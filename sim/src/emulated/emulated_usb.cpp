@@ -1,0 +1,289 @@
+// usbdevfs emulation: libusb's Linux backend talks to /dev/bus/usb/BBB/DDD with ioctls; here
+// they arrive (through umockdev's preload library) on umockdev's worker thread and are answered
+// by the simulated board firmware. URB memory lives in the client; UMockdevIoctlData resolves it
+// into local copies that umockdev writes back when the ioctl completes.
+#include <linux/usbdevice_fs.h>
+#include <sys/ioctl.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cstddef>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <stdexcept>
+#include <thread>
+
+#include "emulated_impl.h"
+
+namespace scanmesh::sim {
+namespace {
+
+constexpr unsigned char kEpOut = 0x04, kEpIn = 0x83;
+
+void complete(UMockdevIoctlClient* client, long result, int err) {
+  umockdev_ioctl_client_complete(client, result, err);
+}
+
+// Hands a finished URB to the REAPURB caller: the reap argument is a `void**` in the client.
+void hand_over(UMockdevIoctlClient* client, UMockdevIoctlData* arg, UMockdevIoctlData* urb) {
+  UMockdevIoctlData* slot = umockdev_ioctl_data_resolve(arg, 0, sizeof(void*), nullptr);
+  umockdev_ioctl_data_set_ptr(slot, 0, urb);
+  umockdev_ioctl_data_unref(slot);
+  umockdev_ioctl_data_unref(urb);
+  complete(client, 0, 0);
+}
+
+usbdevfs_urb* urb_of(UMockdevIoctlData* d) { return reinterpret_cast<usbdevfs_urb*>(d->data); }
+
+gboolean handle_usb_ioctl(UMockdevIoctlBase*, UMockdevIoctlClient* client, gpointer user) {
+  auto* board = static_cast<UsbBoardEmulation*>(user);
+  std::lock_guard lock(board->mutex);
+  const unsigned long request = umockdev_ioctl_client_get_request(client);
+  UMockdevIoctlData* arg = umockdev_ioctl_client_get_arg(client);
+  const bool gone = board->firmware->unplugged();
+
+  switch (request) {
+    case USBDEVFS_GET_CAPABILITIES: {
+      UMockdevIoctlData* d = umockdev_ioctl_data_resolve(arg, 0, sizeof(std::uint32_t), nullptr);
+      const std::uint32_t caps = USBDEVFS_CAP_BULK_CONTINUATION | USBDEVFS_CAP_NO_PACKET_SIZE_LIM |
+                                 USBDEVFS_CAP_REAP_AFTER_DISCONNECT | USBDEVFS_CAP_ZERO_PACKET;
+      std::memcpy(d->data, &caps, sizeof caps);
+      umockdev_ioctl_data_unref(d);
+      complete(client, 0, 0);
+      return TRUE;
+    }
+    case USBDEVFS_GETDRIVER: {
+      UMockdevIoctlData* d =
+          umockdev_ioctl_data_resolve(arg, 0, sizeof(usbdevfs_getdriver), nullptr);
+      auto* g = reinterpret_cast<usbdevfs_getdriver*>(d->data);
+      if (board->state.kernel_driver_detached) {
+        umockdev_ioctl_data_unref(d);
+        complete(client, -1, ENODATA);
+      } else {
+        std::snprintf(g->driver, sizeof g->driver, "cdc_acm");
+        umockdev_ioctl_data_unref(d);
+        complete(client, 0, 0);
+      }
+      return TRUE;
+    }
+    case USBDEVFS_IOCTL: {
+      UMockdevIoctlData* d = umockdev_ioctl_data_resolve(arg, 0, sizeof(usbdevfs_ioctl), nullptr);
+      const int code = reinterpret_cast<usbdevfs_ioctl*>(d->data)->ioctl_code;
+      umockdev_ioctl_data_unref(d);
+      if (code == static_cast<int>(USBDEVFS_DISCONNECT)) board->state.kernel_driver_detached = true;
+      if (code == static_cast<int>(USBDEVFS_CONNECT)) board->state.kernel_driver_detached = false;
+      complete(client, 0, 0);
+      return TRUE;
+    }
+    case USBDEVFS_CLAIMINTERFACE:
+      if (gone) return complete(client, -1, ENODEV), TRUE;
+      if (!board->state.kernel_driver_detached) return complete(client, -1, EBUSY), TRUE;
+      ++board->state.claimed_interfaces;
+      complete(client, 0, 0);
+      return TRUE;
+    case USBDEVFS_RELEASEINTERFACE:
+      --board->state.claimed_interfaces;
+      complete(client, 0, 0);
+      return TRUE;
+    case USBDEVFS_CLEAR_HALT:
+      ++board->state.stalls_cleared;
+      complete(client, 0, 0);
+      return TRUE;
+    case USBDEVFS_RESET:
+    case USBDEVFS_RESETEP:
+    case USBDEVFS_SETCONFIGURATION:
+      complete(client, 0, 0);
+      return TRUE;
+
+    case USBDEVFS_SUBMITURB: {
+      if (gone) return complete(client, -1, ENODEV), TRUE;
+      UMockdevIoctlData* urb_data =
+          umockdev_ioctl_data_resolve(arg, 0, sizeof(usbdevfs_urb), nullptr);
+      usbdevfs_urb* urb = urb_of(urb_data);
+      UMockdevIoctlData* buffer =
+          umockdev_ioctl_data_resolve(urb_data, offsetof(usbdevfs_urb, buffer),
+                                      static_cast<gsize>(urb->buffer_length), nullptr);
+      const auto* bytes = buffer->data;
+      urb->status = 0;
+      if (urb->type == USBDEVFS_URB_TYPE_CONTROL && urb->buffer_length >= 8) {
+        const std::uint8_t request_type = bytes[0], req = bytes[1];
+        const unsigned value = bytes[2] | (bytes[3] << 8);
+        const unsigned length = bytes[6] | (bytes[7] << 8);
+        if (request_type == 0x21 && req == 0x20 && length >= 7) {  // SET_LINE_CODING
+          board->state.line_coding_baud =
+              bytes[8] | (bytes[9] << 8) | (bytes[10] << 16) | (bytes[11] << 24);
+          board->state.data_bits = bytes[14];
+        } else if (request_type == 0x21 && req == 0x22) {  // SET_CONTROL_LINE_STATE
+          const bool dtr = value & 1;
+          // An Arduino resets when DTR rises: the banner follows after the boot time.
+          if (dtr && !board->state.dtr) {
+            board->firmware->reset();
+            board->unread.clear();
+          }
+          board->state.dtr = dtr;
+        }
+        urb->actual_length = static_cast<int>(length);
+        umockdev_ioctl_data_unref(buffer);
+        board->done.push_back(urb_data);
+      } else if (urb->type == USBDEVFS_URB_TYPE_BULK && urb->endpoint == kEpOut) {
+        board->firmware->receive(std::string_view(reinterpret_cast<const char*>(bytes),
+                                                  static_cast<std::size_t>(urb->buffer_length)));
+        urb->actual_length = urb->buffer_length;
+        umockdev_ioctl_data_unref(buffer);
+        board->done.push_back(urb_data);
+      } else if (urb->type == USBDEVFS_URB_TYPE_BULK && urb->endpoint == kEpIn) {
+        umockdev_ioctl_data_unref(buffer);
+        board->in_flight.push_back(urb_data);
+      } else {
+        umockdev_ioctl_data_unref(buffer);
+        umockdev_ioctl_data_unref(urb_data);
+        return complete(client, -1, EINVAL), TRUE;
+      }
+      complete(client, 0, 0);
+      return TRUE;
+    }
+
+    case USBDEVFS_DISCARDURB: {
+      const auto client_urb = reinterpret_cast<gulong>(*reinterpret_cast<void**>(arg->data));
+      for (auto it = board->in_flight.begin(); it != board->in_flight.end(); ++it) {
+        if ((*it)->client_addr != client_urb) continue;
+        urb_of(*it)->status = -ENOENT;
+        urb_of(*it)->actual_length = 0;
+        board->done.push_back(*it);
+        board->in_flight.erase(it);
+        return complete(client, 0, 0), TRUE;
+      }
+      complete(client, -1, EINVAL);
+      return TRUE;
+    }
+
+    case USBDEVFS_REAPURB:
+    case USBDEVFS_REAPURBNDELAY: {
+      if (!board->done.empty()) {
+        UMockdevIoctlData* urb = board->done.front();
+        board->done.erase(board->done.begin());
+        hand_over(client, arg, urb);
+        return TRUE;
+      }
+      if (!board->in_flight.empty()) {
+        UMockdevIoctlData* urb_data = board->in_flight.front();
+        usbdevfs_urb* urb = urb_of(urb_data);
+        if (gone || board->firmware->stalled()) {
+          // Unplugged: the host controller gives back every URB with -ENODEV
+          // (libusb: LIBUSB_ERROR_NO_DEVICE). Stalled: the endpoint answers STALL (-EPIPE).
+          urb->status = gone ? -ENODEV : -EPIPE;
+          urb->actual_length = 0;
+          board->in_flight.pop_front();
+          hand_over(client, arg, urb_data);
+          return TRUE;
+        }
+        board->unread += board->firmware->transmit();
+        if (!board->unread.empty()) {
+          const std::size_t n = std::min<std::size_t>(board->unread.size(),
+                                                      static_cast<std::size_t>(urb->buffer_length));
+          // urb->buffer points at the local copy of the client buffer resolved at submit time.
+          std::memcpy(urb->buffer, board->unread.data(), n);
+          board->unread.erase(0, n);
+          urb->actual_length = static_cast<int>(n);
+          urb->status = 0;
+          board->in_flight.pop_front();
+          hand_over(client, arg, urb_data);
+          return TRUE;
+        }
+      }
+      // Nothing to reap. The usbfs node under umockdev is a socket that always polls writable,
+      // so libusb asks again at once; a short pause keeps that loop from eating a core.
+      std::this_thread::sleep_for(std::chrono::microseconds(50));
+      complete(client, -1, gone ? ENODEV : EAGAIN);
+      return TRUE;
+    }
+    default:
+      return FALSE;
+  }
+}
+
+// Device descriptor + configuration of a minimal CDC-ACM device (USB 2.0, class 2).
+std::string descriptors_hex(std::uint16_t vid, std::uint16_t pid) {
+  char device[64];
+  std::snprintf(device, sizeof device, "1201000202000040%02x%02x%02x%02x000101020301", vid & 0xff,
+                vid >> 8, pid & 0xff, pid >> 8);
+  return std::string(device) +
+         "09023000020100c032"  // configuration: 48 bytes, 2 interfaces, bus powered
+         "090400000102020100"  // interface 0: CDC communication, ACM, AT commands
+         "0705820308000a"      // EP 0x82 interrupt IN, 8 bytes, 10 ms
+         "0904010002"
+         "0a000000"         // interface 1: CDC data
+         "07050402400000"   // EP 0x04 bulk OUT, 64 bytes
+         "07058302400000";  // EP 0x83 bulk IN, 64 bytes
+}
+
+}  // namespace
+
+bool in_umockdev_environment() {
+  // umockdev_in_mock_environment() only turns true once a testbed exists (it looks at
+  // $UMOCKDEV_DIR); what matters before that is whether the preload library is loaded.
+  const char* preload = std::getenv("LD_PRELOAD");
+  return preload && std::strstr(preload, "umockdev-preload") != nullptr;
+}
+
+EmulatedDevices::EmulatedDevices() : impl_(std::make_unique<Impl>()) {
+  if (!in_umockdev_environment())
+    throw std::runtime_error("emulated devices need umockdev-wrapper (see docs/testing.md)");
+  impl_->testbed = umockdev_testbed_new();
+}
+
+EmulatedDevices::~EmulatedDevices() = default;
+
+EmulatedDevices::Impl::~Impl() {
+  for (auto& b : boards) {
+    for (auto* d : b->done) umockdev_ioctl_data_unref(d);
+    for (auto* d : b->in_flight) umockdev_ioctl_data_unref(d);
+  }
+  for (auto* c : cameras) destroy_camera_emulation(c);
+  if (testbed) g_object_unref(testbed);
+  for (auto& b : boards)
+    if (b->handler) g_object_unref(b->handler);
+}
+
+void EmulatedDevices::add_usb_board(std::shared_ptr<SimBoardFirmware> firmware,
+                                    std::uint16_t vendor_id, std::uint16_t product_id,
+                                    int address) {
+  auto board = std::make_unique<UsbBoardEmulation>();
+  board->firmware = std::move(firmware);
+  board->handler = umockdev_ioctl_base_new();
+  g_signal_connect(board->handler, "handle-ioctl", G_CALLBACK(handle_usb_ioctl), board.get());
+  char node[64], sys[64];
+  std::snprintf(node, sizeof node, "/dev/bus/usb/001/%03d", address);
+  std::snprintf(sys, sizeof sys, "/devices/pci0000:00/usb1/1-%d", address);
+  GError* error = nullptr;
+  if (!umockdev_testbed_attach_ioctl(impl_->testbed, node, board->handler, &error)) {
+    const std::string msg = error ? error->message : "unknown";
+    if (error) g_error_free(error);
+    throw std::runtime_error("umockdev_testbed_attach_ioctl: " + msg);
+  }
+  char vidpid[32];
+  std::snprintf(vidpid, sizeof vidpid, "%04x\\n\nA: idProduct=%04x\\n", vendor_id, product_id);
+  const std::string description =
+      std::string("P: ") + sys + "\nN: bus/usb/001/" + (node + std::strlen("/dev/bus/usb/001/")) +
+      "\nE: SUBSYSTEM=usb\nE: DEVTYPE=usb_device\nE: DRIVER=usb\n"
+      "E: BUSNUM=001\nE: DEVNUM=" +
+      (node + std::strlen("/dev/bus/usb/001/")) + "\nE: DEVNAME=" + node +
+      "\nA: busnum=1\\n\nA: devnum=" + std::to_string(address) +
+      "\\n\nA: speed=12\\n\nA: bConfigurationValue=1\\n\nA: idVendor=" + vidpid +
+      "\nH: descriptors=" + descriptors_hex(vendor_id, product_id) + "\n";
+  if (!umockdev_testbed_add_from_string(impl_->testbed, description.c_str(), &error)) {
+    const std::string msg = error ? error->message : "unknown";
+    if (error) g_error_free(error);
+    throw std::runtime_error("umockdev_testbed_add_from_string: " + msg);
+  }
+  impl_->boards.push_back(std::move(board));
+}
+
+EmulatedUsbBoardState EmulatedDevices::usb_board_state() const {
+  if (impl_->boards.empty()) return {};
+  std::lock_guard lock(impl_->boards.front()->mutex);
+  return impl_->boards.front()->state;
+}
+
+}  // namespace scanmesh::sim

@@ -1,0 +1,212 @@
+// A full simulated scan through the real drivers: the libusb board transport against an emulated
+// CDC-ACM board and the V4L2 camera against an emulated capture node (umockdev), both answered
+// by the simulated devices. Frames must match the renderer bit for bit (RGB24 + PNG: lossless);
+// injected faults must name the device and the step and leave a session that resumes to the
+// same result as an uninterrupted scan.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <numbers>
+#include <vector>
+
+#include "scanmesh/acquisition/capture.h"
+#include "scanmesh/core/errors.h"
+#include "scanmesh/drivers/board.h"
+#include "scanmesh/drivers/usb_transport.h"
+#include "scanmesh/sim/emulated_devices.h"
+#include "scanmesh/sim/sim_camera.h"
+#include "session_compare.h"
+
+namespace scanmesh {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kWidth = 48, kHeight = 32;
+constexpr std::size_t kSteps = 100;      // the bit-for-bit scan
+constexpr std::size_t kFaultSteps = 30;  // the fault-and-resume scans
+
+// Sessions go to /dev/shm when there is one: the fsync calls still run but cost nothing there
+// (about 60 ms per step on this machine's ext4); durability against power loss is not what
+// these tests can check (docs/testing.md).
+fs::path scratch(const std::string& name) {
+  const fs::path base =
+      fs::is_directory("/dev/shm") ? fs::path("/dev/shm") : fs::temp_directory_path();
+  const fs::path d = base / ("scanmesh_test_capture_" + std::to_string(getpid())) / name;
+  fs::remove_all(d);
+  return d;
+}
+
+// One set of emulated devices; the table starts where a previous run left it.
+struct Rig {
+  explicit Rig(double table_angle, sim::BoardFaults board_faults = {},
+               sim::CameraFaults camera_faults = {}) {
+    sim::SimBoardOptions bo;
+    bo.time_scale = 0.002;
+    bo.initial_angle_rad = table_angle;
+    bo.faults = board_faults;
+    firmware = std::make_shared<sim::SimBoardFirmware>(bo);
+    sim::SimCameraOptions co;
+    co.width = kWidth;
+    co.height = kHeight;
+    co.time_scale = 0.02;
+    co.faults = camera_faults;
+    auto fw = firmware;
+    camera = std::make_shared<sim::SimCamera>(
+        sim::synthetic_turntable_renderer(kWidth, kHeight), [fw] { return fw->angle_rad(); },
+        [fw] { return fw->laser_mask(); }, co);
+    devices.add_usb_board(firmware);
+    devices.add_camera(camera);
+  }
+
+  // Runs the capture loop with the real drivers into `dir` (created or resumed).
+  CaptureReport scan(const fs::path& dir, double table_angle, std::size_t steps = kSteps) {
+    drivers::BoardOptions bo;
+    bo.command_timeout = std::chrono::milliseconds(200);
+    bo.move_timeout_floor = std::chrono::milliseconds(400);
+    drivers::Board board(drivers::open_usb_transport({.vendor_id = 0x2341, .product_id = 0x0043}),
+                         drivers::make_horus_dialect(), bo);
+    board.connect();
+    if (table_angle != 0) board.declare_position(table_angle);
+    drivers::CameraSettings cs;
+    cs.width = kWidth;
+    cs.height = kHeight;
+    cs.format = drivers::PixelFormat::Rgb24;
+    cs.io = drivers::IoMethod::UserPtr;
+    cs.buffer_count = 3;
+    cs.timeout = std::chrono::milliseconds(1000);
+    drivers::V4l2Camera cam("/dev/video0", cs);
+    std::optional<SessionWriter> session;
+    if (fs::exists(dir / "session.json")) {
+      session.emplace(SessionWriter::resume(dir));
+    } else {
+      SessionHeader h;
+      h.step_count = steps;
+      h.laser_count = 2;
+      h.camera = cam.descriptor();
+      h.board_device = board.device_name();
+      h.board_dialect = board.dialect().name();
+      h.board_firmware = board.firmware_banner();
+      h.simulated = true;
+      session.emplace(SessionWriter::create(dir, h));
+    }
+    CaptureOptions o;
+    o.settle_s = 0;
+    o.discard_frames = 1;
+    return capture_steps(*session, board, cam, o);
+  }
+
+  std::shared_ptr<sim::SimBoardFirmware> firmware;
+  std::shared_ptr<sim::SimCamera> camera;
+  sim::EmulatedDevices devices;
+};
+
+// Where the simulated table stands for step i: whole microsteps (3200 per turn).
+double table_angle_of_step(std::size_t i) {
+  const double steps = std::round(static_cast<double>(i) * 3200.0 / kSteps);
+  return steps * 2 * std::numbers::pi / 3200.0;
+}
+
+double last_step_angle(const fs::path& dir) {
+  const SessionManifest m = read_session_manifest(dir);
+  return m.steps.empty() ? 0.0 : m.steps.back().angle_rad;
+}
+
+TEST(EmulatedScan, HundredStepsTwoLasersMatchTheRendererBitForBit) {
+  const fs::path dir = scratch("hundred");
+  {
+    Rig rig(0);
+    const CaptureReport r = rig.scan(dir, 0);
+    ASSERT_EQ(r.steps_done, kSteps);
+  }
+  const SessionReader reader(dir);
+  ASSERT_EQ(reader.step_count(), kSteps);
+  ASSERT_TRUE(reader.complete());
+  EXPECT_EQ(reader.manifest().header.camera.card, "Simulated UVC Camera");
+  EXPECT_EQ(reader.manifest().header.board_device, "usb 001:002 (2341:0043)");
+  const auto render = sim::synthetic_turntable_renderer(kWidth, kHeight);
+  for (std::size_t i = 0; i < kSteps; ++i) {
+    const ScanStep s = reader.step(i);
+    EXPECT_NEAR(s.angle_rad, 2 * std::numbers::pi * i / kSteps, 1e-12);
+    const double table = table_angle_of_step(i);
+    ASSERT_EQ(s.laser_off.pixels, render(table, 0).pixels) << "step " << i << " laser off";
+    ASSERT_EQ(s.laser_on.size(), 2u);
+    ASSERT_EQ(s.laser_on[0].pixels, render(table, 1).pixels) << "step " << i << " laser 0";
+    ASSERT_EQ(s.laser_on[1].pixels, render(table, 2).pixels) << "step " << i << " laser 1";
+  }
+  fs::remove_all(dir);
+}
+
+struct FaultCase {
+  const char* name;
+  sim::BoardFaults board;
+  sim::CameraFaults camera;
+  const char* device;
+  const char* problem;
+};
+
+// Board command numbers: 3 at connect (feed, G90, M17); each step sends 2 lasers off, the move,
+// and on/off per laser: 7 commands, so 3 + 7 * 10 + 3 is step 10's move. Camera frames: 6 per
+// step (each kept frame follows a discarded one).
+constexpr int kStep10Move = 3 + 7 * 10 + 3;
+
+TEST(EmulatedScan, EveryFaultNamesDeviceAndStepAndResumesToTheSameSession) {
+  const fs::path reference = scratch("reference");
+  {
+    Rig rig(0);
+    ASSERT_EQ(rig.scan(reference, 0, kFaultSteps).steps_done, kFaultSteps);
+  }
+  const char* usb = "usb 001:002 (2341:0043)";
+  const std::vector<FaultCase> cases = {
+      {"board unplug", {.unplug_at_command = kStep10Move}, {}, usb, "unplugged"},
+      {"stalled endpoint", {.stall_at_command = kStep10Move + 2}, {}, usb, "endpoint stalled"},
+      {"move never completes", {.hang_move_at_command = kStep10Move}, {}, usb, "no 'ok' for 'G1 X"},
+      {"camera EIO", {}, {.eio_at_sequence = 40}, "/dev/video0", "I/O error (EIO)"},
+      {"camera unplug", {}, {.unplug_at_sequence = 100}, "/dev/video0", "unplugged"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.name);
+    const fs::path dir = scratch("fault");
+    std::size_t failed_at = 0;
+    {
+      Rig rig(0, c.board, c.camera);
+      try {
+        rig.scan(dir, 0, kFaultSteps);
+        ADD_FAILURE() << "no error";
+      } catch (const DeviceError& e) {
+        const std::string what = e.what();
+        EXPECT_EQ(e.device(), c.device) << what;
+        EXPECT_NE(what.find(c.problem), std::string::npos) << what;
+        failed_at = read_session_manifest(dir).steps.size();
+        EXPECT_NE(what.find("step " + std::to_string(failed_at) + " of 30: "), std::string::npos)
+            << what;
+      }
+    }
+    EXPECT_GT(failed_at, 0u);
+    EXPECT_LT(failed_at, kFaultSteps);
+    const double angle = last_step_angle(dir);
+    Rig rig(angle);
+    const CaptureReport r = rig.scan(dir, angle, kFaultSteps);
+    EXPECT_EQ(r.first_step, failed_at);
+    EXPECT_EQ(r.steps_done, kFaultSteps);
+    EXPECT_TRUE(test::sessions_identical(dir, reference));
+    fs::remove_all(dir);
+  }
+  // Lost and garbled acknowledgements are retried, dropped frames counted: same session.
+  const fs::path dir = scratch("absorbed");
+  {
+    Rig rig(0, {.drop_ok_at_command = kStep10Move + 1, .garble_ok_at_command = kStep10Move},
+            {.drop_sequences = {10, 11, 50}});
+    const CaptureReport r = rig.scan(dir, 0, kFaultSteps);
+    EXPECT_EQ(r.steps_done, kFaultSteps);
+    EXPECT_EQ(r.dropped_frames, 3u);
+  }
+  EXPECT_TRUE(test::sessions_identical(dir, reference));
+  fs::remove_all(dir);
+  fs::remove_all(reference);
+}
+
+}  // namespace
+}  // namespace scanmesh
