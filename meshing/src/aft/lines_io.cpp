@@ -1,10 +1,10 @@
 // Animation-line input: SVG and JSON readers, pixel <-> (phi, h), surface checks.
 #include <algorithm>
 #include <array>
-#include <map>
 #include <cctype>
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -36,7 +36,8 @@ constexpr std::size_t kMaxPoints = 200000;
 }
 
 int line_of(std::string_view text, std::size_t pos) {
-  return 1 + static_cast<int>(std::count(text.begin(), text.begin() + std::min(pos, text.size()), '\n'));
+  return 1 + static_cast<int>(
+                 std::count(text.begin(), text.begin() + std::min(pos, text.size()), '\n'));
 }
 
 bool has_token(const std::string& s, const char* token) {
@@ -83,7 +84,8 @@ class PathParser {
         cmd = c;
         ++i_;
       } else if (cmd == 0) {
-        fail(file_, line_, "path data must start with a command, found '" + std::string(1, c) + "'");
+        fail(file_, line_,
+             "path data must start with a command, found '" + std::string(1, c) + "'");
       } else if (cmd == 'M') {
         cmd = 'L';  // implicit lineto after moveto
       } else if (cmd == 'm') {
@@ -176,8 +178,7 @@ class PathParser {
     if (cur.empty()) fail(file_, line_, "path draws before its first M");
   }
   void skip_separators() {
-    while (i_ < d_.size() &&
-           (std::isspace(static_cast<unsigned char>(d_[i_])) || d_[i_] == ','))
+    while (i_ < d_.size() && (std::isspace(static_cast<unsigned char>(d_[i_])) || d_[i_] == ','))
       ++i_;
   }
   double number() {
@@ -185,7 +186,8 @@ class PathParser {
     const char* begin = d_.c_str() + i_;
     char* end = nullptr;
     const double v = std::strtod(begin, &end);
-    if (end == begin) fail(file_, line_, "expected a number in path data at offset " + std::to_string(i_));
+    if (end == begin)
+      fail(file_, line_, "expected a number in path data at offset " + std::to_string(i_));
     if (!std::isfinite(v)) fail(file_, line_, "non-finite number in path data");
     i_ += static_cast<std::size_t>(end - begin);
     return v;
@@ -243,8 +245,8 @@ std::vector<Element> scan_elements(std::string_view text, const std::string& fil
     Element el;
     el.line = line_of(text, i);
     std::size_t k = i + 1;
-    while (k < text.size() && (std::isalnum(static_cast<unsigned char>(text[k])) || text[k] == ':' ||
-                               text[k] == '-' || text[k] == '_'))
+    while (k < text.size() && (std::isalnum(static_cast<unsigned char>(text[k])) ||
+                               text[k] == ':' || text[k] == '-' || text[k] == '_'))
       ++k;
     el.name = std::string(text.substr(i + 1, k - i - 1));
     // attributes
@@ -258,8 +260,8 @@ std::vector<Element> scan_elements(std::string_view text, const std::string& fil
         break;
       }
       std::size_t a = k;
-      while (k < text.size() && text[k] != '=' && !std::isspace(static_cast<unsigned char>(text[k])) &&
-             text[k] != '>')
+      while (k < text.size() && text[k] != '=' &&
+             !std::isspace(static_cast<unsigned char>(text[k])) && text[k] != '>')
         ++k;
       const std::string key(text.substr(a, k - a));
       while (k < text.size() && std::isspace(static_cast<unsigned char>(text[k]))) ++k;
@@ -345,8 +347,9 @@ void tidy(AnimationLine& line, const std::string& file, int src_line) {
   }
   line.pixels = std::move(p);
   if (line.pixels.size() < (line.closed ? 3u : 2u))
-    fail(file, src_line, "line '" + line.id + "' is too short (fewer than " +
-                             (line.closed ? "3" : "2") + " distinct points)");
+    fail(file, src_line,
+         "line '" + line.id + "' is too short (fewer than " + (line.closed ? "3" : "2") +
+             " distinct points)");
 }
 
 }  // namespace
@@ -513,14 +516,13 @@ void validate_lines(const LineSet& set, const ScanSurface& surface) {
         if (p.y() < 0.5 || p.y() > surface.n_h() - 0.5 || !surface.defined(q.x(), q.y())) {
           std::ostringstream os;
           os.precision(1);
-          os << std::fixed << who << " leaves the scanned area at pixel (" << p.x() << ", "
-             << p.y() << ")";
+          os << std::fixed << who << " leaves the scanned area at pixel (" << p.x() << ", " << p.y()
+             << ")";
           throw FileFormatError(set.file, os.str());
         }
       }
     }
-    if (length_px < 2.0)
-      throw FileFormatError(set.file, who + " is too short (under 2 pixels)");
+    if (length_px < 2.0) throw FileFormatError(set.file, who + " is too short (under 2 pixels)");
   }
 }
 

@@ -121,17 +121,17 @@ std::string RegionGraph::to_text() const {
   std::ostringstream os;
   int openings = 0;
   for (const Region& r : regions) openings += r.opening;
-  os << nodes.size() << " nodes, " << segments.size() << " segments, "
-     << regions.size() - openings << " regions, " << openings << " openings, "
-     << dangling_ends.size() << " dangling line ends\n";
+  os << nodes.size() << " nodes, " << segments.size() << " segments, " << regions.size() - openings
+     << " regions, " << openings << " openings, " << dangling_ends.size()
+     << " dangling line ends\n";
   for (std::size_t r = 0; r < regions.size(); ++r) {
     const Region& g = regions[r];
     int constraint_edges = 0;
     for (int c : g.inner) constraint_edges += static_cast<int>(cycles[c].edges.size());
     os << "  " << r << " " << g.name << (g.opening ? " (opening)" : "") << ": "
        << cycles[g.outer].edges.size() << " boundary segments, " << g.inner.size()
-       << " inner loops (" << constraint_edges << " segments), area " << g.area
-       << " rad*mm, unit " << g.unit_mm << " mm, mesher " << g.mesher << "\n";
+       << " inner loops (" << constraint_edges << " segments), area " << g.area << " rad*mm, unit "
+       << g.unit_mm << " mm, mesher " << g.mesher << "\n";
   }
   return os.str();
 }
@@ -212,8 +212,8 @@ RegionGraph analyze_regions(const LineSet& set, const ScanSurface& surface, doub
           const int np = static_cast<int>(P[l].size());
           if (l == m) {
             if (q0.index <= p.index) continue;
-            const bool adjacent = q0.index == p.index + 1 ||
-                                  (closed[l] && p.index == 0 && q0.index == np - 1);
+            const bool adjacent =
+                q0.index == p.index + 1 || (closed[l] && p.index == 0 && q0.index == np - 1);
             if (adjacent) continue;
           }
           const Vector2d pmin = p.a.cwiseMin(p.b), pmax = p.a.cwiseMax(p.b);
@@ -237,11 +237,11 @@ RegionGraph analyze_regions(const LineSet& set, const ScanSurface& surface, doub
               if (std::fabs(cross) > 1e-9 * r.norm()) continue;
               const double t0 = w.dot(r) / r.squaredNorm();
               const double t1 = (q.b - p.a).dot(r) / r.squaredNorm();
-              const double lo = std::max(0.0, std::min(t0, t1)), hi = std::min(1.0, std::max(t0, t1));
+              const double lo = std::max(0.0, std::min(t0, t1)),
+                           hi = std::min(1.0, std::max(t0, t1));
               if (hi < lo - 1e-12) continue;
               if (hi - lo > 1e-9) {
-                if (l == m)
-                  throw FileFormatError(file, who(l) + " runs back over itself");
+                if (l == m) throw FileFormatError(file, who(l) + " runs back over itself");
                 throw FileFormatError(file, who(l) + " and " + who(m) + " overlap");
               }
               t = lo;
@@ -440,7 +440,8 @@ RegionGraph analyze_regions(const LineSet& set, const ScanSurface& surface, doub
     for (std::size_t r = 0; r < g.regions.size(); ++r) {
       const BoundaryCycle& oc = g.cycles[g.regions[r].outer];
       if (oc.component == cy.component) continue;
-      if (oc.area < best_area && point_in_polygon(g.cycle_polygon(g.regions[r].outer), q, 2 * M_PI)) {
+      if (oc.area < best_area &&
+          point_in_polygon(g.cycle_polygon(g.regions[r].outer), q, 2 * M_PI)) {
         best = static_cast<int>(r);
         best_area = oc.area;
       }
@@ -504,7 +505,8 @@ RegionGraph analyze_regions(const LineSet& set, const ScanSurface& surface, doub
           reg.label_point = q;
         }
       }
-    reg.label_point.x() = surface.phi0() + std::fmod(reg.label_point.x() - surface.phi0() + 8 * M_PI, 2 * M_PI);
+    reg.label_point.x() =
+        surface.phi0() + std::fmod(reg.label_point.x() - surface.phi0() + 8 * M_PI, 2 * M_PI);
   }
   return g;
 }

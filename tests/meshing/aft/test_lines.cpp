@@ -64,11 +64,10 @@ TEST(AnimationLinesJson, FormAndErrors) {
   EXPECT_EQ(set.lines[0].kind, LineKind::Opening);
   EXPECT_GT(set.lines[0].pixels.size(), 20u);  // the spline is flattened
   EXPECT_EQ(set.lines[1].id, "line-2");
-  EXPECT_THROW(parse_lines_json(R"({"lines": [{"points": [[0, 0]]}]})", "l.json"),
-               FileFormatError);
-  EXPECT_THROW(parse_lines_json(R"({"lines": [{"kind": "x", "points": [[0, 0], [1, 1]]}]})",
-                                "l.json"),
-               FileFormatError);
+  EXPECT_THROW(parse_lines_json(R"({"lines": [{"points": [[0, 0]]}]})", "l.json"), FileFormatError);
+  EXPECT_THROW(
+      parse_lines_json(R"({"lines": [{"kind": "x", "points": [[0, 0], [1, 1]]}]})", "l.json"),
+      FileFormatError);
   EXPECT_THROW(parse_lines_json("[1, 2", "l.json"), FileFormatError);
 }
 
@@ -79,7 +78,8 @@ TEST(AnimationLines, SurfaceChecks) {
   const ScanSurface surface(grid);
   const LineSet ok = parse_lines_svg("<svg><path d='M 10 10 L 100 10'/></svg>", "ok.svg");
   EXPECT_NO_THROW(validate_lines(ok, surface));
-  const LineSet hole = parse_lines_svg("<svg><path id='h' d='M 150 110 L 300 110'/></svg>", "h.svg");
+  const LineSet hole =
+      parse_lines_svg("<svg><path id='h' d='M 150 110 L 300 110'/></svg>", "h.svg");
   try {
     validate_lines(hole, surface);
     FAIL();

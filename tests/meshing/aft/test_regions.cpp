@@ -87,8 +87,7 @@ TEST_F(Regions, DanglingInternalLines) {
   EXPECT_EQ(g.dangling_ends.size(), 3u);
   // The fold is split where it meets the border and appears twice in the outer cycle.
   int fold_uses = 0;
-  for (const HalfEdgeRef& e : g.cycles[r.outer].edges)
-    fold_uses += g.segments[e.segment].line == 2;
+  for (const HalfEdgeRef& e : g.cycles[r.outer].edges) fold_uses += g.segments[e.segment].line == 2;
   EXPECT_EQ(fold_uses, 2);
   EXPECT_EQ(g.cycles[r.outer].edges.size(), 3u);  // the border loop (one junction) + fold x2
 }

@@ -19,9 +19,9 @@ namespace scanmesh::aft {
 
 //! Nodes placed on the segments: shared junction nodes first, then each segment's interior.
 struct SegmentNodes {
-  std::vector<Eigen::Vector2d> params;       //!< (phi, h) of every boundary node
-  std::vector<std::vector<int>> chains;      //!< per segment: node indices from node0 to node1
-  std::vector<double> spacing_mm;            //!< per segment: the interval d_I' used
+  std::vector<Eigen::Vector2d> params;   //!< (phi, h) of every boundary node
+  std::vector<std::vector<int>> chains;  //!< per segment: node indices from node0 to node1
+  std::vector<double> spacing_mm;        //!< per segment: the interval d_I' used
 };
 
 //! §5.1.2: N_nodes = floor(s / d_I) + 2 and d_I' = s / (floor(s / d_I) + 1), s the 3D arc length
@@ -38,12 +38,12 @@ struct RegionMeshStats {
 };
 
 struct AnimationMesh {
-  Mesh mesh;                                 //!< face_labels = region index
-  std::vector<Eigen::Vector2d> params;       //!< (phi, h) per vertex
-  std::vector<std::uint8_t> steiner;         //!< 1 for nodes the mesher added
-  std::vector<std::array<int, 2>> line_edges;  //!< mesh edges lying on animation lines
-  std::vector<int> line_edge_line;             //!< the line of each line edge
-  std::vector<std::vector<int>> segment_chains;  //!< per segment: its vertex chain
+  Mesh mesh;                                      //!< face_labels = region index
+  std::vector<Eigen::Vector2d> params;            //!< (phi, h) per vertex
+  std::vector<std::uint8_t> steiner;              //!< 1 for nodes the mesher added
+  std::vector<std::array<int, 2>> line_edges;     //!< mesh edges lying on animation lines
+  std::vector<int> line_edge_line;                //!< the line of each line edge
+  std::vector<std::vector<int>> segment_chains;   //!< per segment: its vertex chain
   std::map<std::string, std::vector<int>> seams;  //!< seam line id -> ordered vertex list
   std::vector<RegionMeshStats> region_stats;
   int flips = 0;

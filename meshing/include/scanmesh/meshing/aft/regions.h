@@ -35,8 +35,8 @@ struct HalfEdgeRef {
 //! appears in it twice, once in each direction.
 struct BoundaryCycle {
   std::vector<HalfEdgeRef> edges;
-  double area = 0;   //!< signed, rad * mm
-  int winding = 0;   //!< turns round the axis (non-zero: a cap towards the grid's top/bottom)
+  double area = 0;  //!< signed, rad * mm
+  int winding = 0;  //!< turns round the axis (non-zero: a cap towards the grid's top/bottom)
   int component = -1;
 };
 
@@ -55,7 +55,7 @@ struct RegionGraph {
   std::vector<Eigen::Vector2d> nodes;  //!< (phi, h), phi in [phi0, phi0 + 2 pi)
   std::vector<Segment> segments;
   std::vector<BoundaryCycle> cycles;
-  std::vector<Region> regions;  //!< includes openings (opening = true)
+  std::vector<Region> regions;     //!< includes openings (opening = true)
   std::vector<int> dangling_ends;  //!< nodes where a line ends without meeting another
 
   //! The region containing (phi, h), or nullopt (outside all regions).
@@ -69,8 +69,7 @@ struct RegionGraph {
 //! Builds the graph. End points within `snap_px` texture pixels of another line are moved onto
 //! it (a T junction); end points within snap_px of each other are joined. Throws
 //! FileFormatError naming the file and line for a self-intersecting line or lines that overlap.
-RegionGraph analyze_regions(const LineSet& lines, const ScanSurface& surface,
-                            double snap_px = 1.5);
+RegionGraph analyze_regions(const LineSet& lines, const ScanSurface& surface, double snap_px = 1.5);
 
 // ---------------------------------------------------------------------------------------------
 
@@ -89,7 +88,7 @@ struct RegionSettings {
   std::string default_mesher = "aft";
   EdgeStrategy strategy = EdgeStrategy::Shortest;
   SegmentInit segment_init = SegmentInit::Equidistant;
-  double curvature_weight_mm = 10.0;  //!< curvature init: measure = arc + weight * turning
+  double curvature_weight_mm = 10.0;   //!< curvature init: measure = arc + weight * turning
   double chordal_tolerance_mm = 0.15;  //!< curvature-adaptive size: sagitta bound
   double min_unit_mm = 0.3;            //!< lower bound of the adaptive size
   int relax_iterations = 30;           //!< segment nodes "on rails"
