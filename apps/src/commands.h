@@ -124,3 +124,8 @@ struct ParticlesArgs {
 int run_particles(const ParticlesArgs& args);
 
 }  // namespace scanmesh::cli
+
+// --- animation meshes (seed 000): apps/src/cmd_aft.cpp ---
+namespace scanmesh::cli {
+void register_aft_commands(CLI::App& app, CommandList& commands);
+}  // namespace scanmesh::cli
