@@ -72,9 +72,10 @@ Image8 draw_regions(const RangeGrid& grid, const ScanSurface& surface, const aft
       if (!r) continue;
       const Rgb8 c = g.regions[*r].opening ? Rgb8{20, 20, 20} : region_color(*r);
       const Rgb8 t = im.rgb(x, y);
-      im.set_rgb(x, y, {static_cast<std::uint8_t>((t.r + c.r) / 2),
-                        static_cast<std::uint8_t>((t.g + c.g) / 2),
-                        static_cast<std::uint8_t>((t.b + c.b) / 2)});
+      im.set_rgb(
+          x, y,
+          {static_cast<std::uint8_t>((t.r + c.r) / 2), static_cast<std::uint8_t>((t.g + c.g) / 2),
+           static_cast<std::uint8_t>((t.b + c.b) / 2)});
     }
   for (const auto& seg : g.segments) {
     const auto kind = lines.lines[seg.line].kind;
@@ -88,13 +89,15 @@ Image8 draw_regions(const RangeGrid& grid, const ScanSurface& surface, const aft
   for (std::size_t r = 0; r < g.regions.size(); ++r) {
     const Vector2d p = aft::param_to_pixel(surface, g.regions[r].label_point);
     const int x = (static_cast<int>(p.x()) % im.width + im.width) % im.width;
-    draw_text(im, std::clamp(x - 4, 0, im.width - 12), std::clamp(static_cast<int>(p.y()) - 3, 0, im.height - 8),
-              std::to_string(r), {0, 0, 0});
+    draw_text(im, std::clamp(x - 4, 0, im.width - 12),
+              std::clamp(static_cast<int>(p.y()) - 3, 0, im.height - 8), std::to_string(r),
+              {0, 0, 0});
   }
   return im;
 }
 
-Image8 draw_mesh_2d(const RangeGrid& grid, const ScanSurface& surface, const aft::AnimationMesh& am) {
+Image8 draw_mesh_2d(const RangeGrid& grid, const ScanSurface& surface,
+                    const aft::AnimationMesh& am) {
   Image8 im = texture_of(grid);
   auto px = [&](int v) { return aft::param_to_pixel(surface, am.params[v]); };
   for (const auto& t : am.mesh.triangles)
@@ -240,7 +243,8 @@ void register_aft_commands(CLI::App& app, CommandList& commands) {
   r->add_option("--lines", ra->lines, "Animation lines (.svg or .json)")
       ->required()
       ->check(CLI::ExistingFile);
-  r->add_option("--settings", ra->settings, "Region settings (.yaml/.json)")->check(CLI::ExistingFile);
+  r->add_option("--settings", ra->settings, "Region settings (.yaml/.json)")
+      ->check(CLI::ExistingFile);
   r->add_option("--png", ra->png, "Draw the regions over the texture into this PNG");
   commands.push_back({r, [ra] { return run_regions(*ra); }});
 
@@ -250,7 +254,8 @@ void register_aft_commands(CLI::App& app, CommandList& commands) {
   m->add_option("--lines", aa->lines, "Animation lines (.svg or .json)")
       ->required()
       ->check(CLI::ExistingFile);
-  m->add_option("--settings", aa->settings, "Region settings (.yaml/.json)")->check(CLI::ExistingFile);
+  m->add_option("--settings", aa->settings, "Region settings (.yaml/.json)")
+      ->check(CLI::ExistingFile);
   m->add_option("--out", aa->out, "Output directory")->required();
   m->add_option("--seed", aa->seed, "Seed of the random edge order");
   m->add_option("--strategy", aa->strategy, "Front edge order: random | shortest | longest")

@@ -32,6 +32,7 @@ struct RegionMeshInput {
   double chordal_tolerance_mm = 0.15;
   double min_unit_mm = 0.3;
   std::uint64_t seed = 1;
+  std::size_t max_steps = 0;  //!< 0: derived from the front size
 };
 
 //! The advancing-front mesher of one region; triangles counter-clockwise seen from outside.

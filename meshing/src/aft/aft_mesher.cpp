@@ -8,6 +8,8 @@
 // rotating the ideal apex about the edge until it meets the surface.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <queue>
 #include <unordered_map>
 
@@ -87,8 +89,12 @@ class Mesher {
     std::vector<int> deferred;
     bool relaxed = false;
     std::size_t guard = 0;
-    const std::size_t guard_max = 200000 + 400 * in_.front.size();
-    while (++guard < guard_max) {
+    const std::size_t guard_max = in_.max_steps > 0 ? in_.max_steps : 20000 + 40 * in_.front.size();
+    while (true) {
+      if (++guard >= guard_max) {
+        stats_.unmeshed_front_edges = static_cast<int>(index_.size());
+        break;
+      }
       int e = next_edge();
       if (e < 0) {
         // Retry the edges that failed while anything still changes; then once relaxed.
@@ -109,6 +115,9 @@ class Mesher {
         continue;
       }
       if (!edges_[e].alive) continue;
+      if (std::getenv("SCANMESH_AFT_DEBUG") && guard % 2000 == 0)
+        std::fprintf(stderr, "aft: iter %zu triangles %zu nodes %zu alive %zu\n", guard,
+                     triangles_.size(), N_.pos.size(), index_.size());
       if (try_edge(e, relaxed)) {
         progress_ = true;
         relaxed = false;
@@ -185,7 +194,7 @@ class Mesher {
         if (k > 1e-12) u = std::min(u, std::sqrt(8.0 * in_.chordal_tolerance_mm / k));
       }
     }
-    return std::max(u, std::max(in_.min_unit_mm, 0.4 * in_.unit_mm));
+    return std::max(u, std::max(in_.min_unit_mm, 0.6 * in_.unit_mm));
   }
 
   // Local tangent frame of the current edge.

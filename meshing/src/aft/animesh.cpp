@@ -2,6 +2,7 @@
 // tangential smoothing, and the quality report.
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <set>
 #include <sstream>
 #include <unordered_map>
@@ -124,6 +125,8 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
     in.chordal_tolerance_mm = settings.chordal_tolerance_mm;
     in.min_unit_mm = settings.min_unit_mm;
     in.seed = settings.seed + 1000003ull * r;
+    if (const char* m = std::getenv("SCANMESH_AFT_MAX_STEPS"))
+      in.max_steps = std::strtoul(m, nullptr, 10);
     std::vector<int> cycles{reg.outer};
     cycles.insert(cycles.end(), reg.inner.begin(), reg.inner.end());
     for (int c : cycles)

@@ -89,7 +89,7 @@ struct RegionSettings {
   EdgeStrategy strategy = EdgeStrategy::Shortest;
   SegmentInit segment_init = SegmentInit::Equidistant;
   double curvature_weight_mm = 10.0;   //!< curvature init: measure = arc + weight * turning
-  double chordal_tolerance_mm = 0.15;  //!< curvature-adaptive size: sagitta bound
+  double chordal_tolerance_mm = 0.5;  //!< curvature-adaptive size: sagitta bound
   double min_unit_mm = 0.3;            //!< lower bound of the adaptive size
   int relax_iterations = 30;           //!< segment nodes "on rails"
   int smooth_iterations = 3;           //!< tangential smoothing of Steiner points
