@@ -33,6 +33,9 @@ struct RegionMeshInput {
   double min_unit_mm = 0.3;
   std::uint64_t seed = 1;
   std::size_t max_steps = 0;  //!< 0: derived from the front size
+  //! The region in (phi, h): outer boundary and holes (even-odd); every new node and triangle
+  //! centroid must lie inside (a safety net behind the front tests).
+  std::vector<std::vector<Eigen::Vector2d>> polygons;
 };
 
 //! The advancing-front mesher of one region; triangles counter-clockwise seen from outside.

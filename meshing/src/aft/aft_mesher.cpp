@@ -78,6 +78,33 @@ double min_angle(const Vector3d& a, const Vector3d& b, const Vector3d& c) {
   return std::min({ang(a, b, c), ang(b, c, a), ang(c, a, b)});
 }
 
+bool inside_polygons(const std::vector<std::vector<Vector2d>>& polys, const Vector2d& p0) {
+  bool inside = false;
+  for (const auto& poly : polys) {
+    if (poly.size() < 3) continue;
+    double xmin = 1e300, xmax = -1e300;
+    for (const Vector2d& v : poly) {
+      xmin = std::min(xmin, v.x());
+      xmax = std::max(xmax, v.x());
+    }
+    Vector2d q = p0;
+    q.x() -= 2 * M_PI * std::floor((q.x() - xmin) / (2 * M_PI));
+    for (; q.x() <= xmax; q.x() += 2 * M_PI) {
+      bool in = false;
+      for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
+        const Vector2d& a = poly[i];
+        const Vector2d& b = poly[j];
+        if ((a.y() > q.y()) != (b.y() > q.y())) {
+          const double x = a.x() + (q.y() - a.y()) / (b.y() - a.y()) * (b.x() - a.x());
+          if (q.x() < x) in = !in;
+        }
+      }
+      if (in) inside = !inside;
+    }
+  }
+  return inside;
+}
+
 class Mesher {
  public:
   Mesher(NodeStore& nodes, const ScanSurface& surface, const RegionMeshInput& in,
@@ -106,6 +133,11 @@ class Mesher {
         if (!progress_) {
           if (relaxed) {
             stats_.unmeshed_front_edges = static_cast<int>(live.size());
+            if (std::getenv("SCANMESH_AFT_DEBUG"))
+              for (int d : live)
+                std::fprintf(stderr, "left: %d->%d (%.5f %.4f)->(%.5f %.4f) n.n %g\n", edges_[d].a, edges_[d].b,
+                             N_.params[edges_[d].a].x(), N_.params[edges_[d].a].y(),
+                             N_.params[edges_[d].b].x(), N_.params[edges_[d].b].y(), N_.normal[edges_[d].a].dot(N_.normal[edges_[d].b]));
             break;
           }
           relaxed = true;
@@ -221,10 +253,10 @@ class Mesher {
       const Vector3d& q = N_.pos[e.b];
       const double lim = radius + e.length;
       if ((p - f.M).squaredNorm() > lim * lim && (q - f.M).squaredNorm() > lim * lim) continue;
-      if (N_.normal[e.a].dot(f.n) < 0.2 && N_.normal[e.b].dot(f.n) < 0.2) continue;
+      // every near edge takes part in the tests, whatever its normal
       nr.edges.push_back(id);
       for (int v : {e.a, e.b})
-        if ((N_.pos[v] - f.M).squaredNorm() < r2 && N_.normal[v].dot(f.n) >= 0.2)
+        if ((N_.pos[v] - f.M).squaredNorm() < r2)
           nr.nodes.push_back(v);
     }
     if (compact.size() * 2 < alive_.size()) alive_.swap(compact);
@@ -235,17 +267,40 @@ class Mesher {
 
   // Triangle a, b, c (c left of a->b) is free: no front edge crosses it or enters a corner,
   // no front node inside, the sides are not already front edges, and it faces outwards.
-  bool visible(int a, int b, int c, const Vector3d& cpos, const Frame& f, const Near& nr) {
-    const Vector2d A = f(N_.pos[a]), B = f(N_.pos[b]), C = f(cpos);
+  // The topological tests run in the (phi, h) parameter plane, scaled to millimetres at the
+  // edge (x = rho * phi): the surface is a graph over it, so the front is a planar straight-line
+  // graph there and the tests cannot be fooled by a tangent plane that folds over on strongly
+  // curved parts. Shape decisions (candidates, circumcentres) stay in 3D / the tangent frame.
+  struct ParamFrame {
+    Vector2d origin;
+    double rho;
+    Vector2d operator()(const Vector2d& p) const {
+      return {rho * std::remainder(p.x() - origin.x(), 2 * M_PI), p.y() - origin.y()};
+    }
+  };
+
+  bool visible(int a, int b, int c, const Vector3d& cpos, const Vector2d& cparam, const Frame& f,
+               const Near& nr) {
+    ParamFrame pf;
+    pf.origin = N_.params[a];
+    pf.rho = std::max(1e-6, std::hypot(f.M.x(), f.M.y()));
+    auto P2 = [&](int v) { return pf(N_.params[v]); };
+    const Vector2d A = P2(a), B = P2(b), C = pf(cparam);
     const double scale = (B - A).norm();
     const double eps = 1e-9 * scale * scale;
     if (cross2(B - A, C - A) <= eps) return false;
+    if (!in_.polygons.empty()) {
+      const Vector2d cen(pf.origin.x() + (A.x() + B.x() + C.x()) / (3 * pf.rho),
+                         pf.origin.y() + (A.y() + B.y() + C.y()) / 3);
+      if (!inside_polygons(in_.polygons, cen)) return false;
+      if (c < 0 && !inside_polygons(in_.polygons, cparam)) return false;
+    }
     const Vector3d nt = (N_.pos[b] - N_.pos[a]).cross(cpos - N_.pos[a]);
-    if (nt.dot(f.n) <= 0) return false;
+    if (!relaxed_ && nt.dot(f.n) <= 0) return false;
     if (c >= 0 && (find(a, c) >= 0 || find(c, b) >= 0)) return false;
     for (int id : nr.edges) {
       const FEdge& e = edges_[id];
-      const Vector2d P = f(N_.pos[e.a]), Q = f(N_.pos[e.b]);
+      const Vector2d P = P2(e.a), Q = P2(e.b);
       const bool ta = e.a == a || e.a == b || e.a == c, tb = e.b == a || e.b == b || e.b == c;
       if (ta && tb) continue;  // a side of the triangle
       if (!ta && !tb) {
@@ -273,7 +328,7 @@ class Mesher {
     }
     for (int v : nr.nodes) {
       if (v == a || v == b || v == c) continue;
-      const Vector2d P = f(N_.pos[v]);
+      const Vector2d P = P2(v);
       if (cross2(B - A, P - A) > eps && cross2(C - B, P - B) > eps && cross2(A - C, P - C) > eps)
         return false;
     }
@@ -293,6 +348,22 @@ class Mesher {
 
   void add_triangle(int e, int c) {
     const int a = edges_[e].a, b = edges_[e].b;
+    if (const char* box = std::getenv("SCANMESH_AFT_BOX")) {
+      double x0, x1, y0, y1;
+      if (std::sscanf(box, "%lf,%lf,%lf,%lf", &x0, &x1, &y0, &y1) == 4) {
+        Vector2d cp = N_.params[c];
+        cp.x() = x0 + std::fmod(std::fmod(cp.x() - x0, 2 * M_PI) + 2 * M_PI, 2 * M_PI);
+        if (cp.x() < x0 || cp.x() > x1 || cp.y() < y0 || cp.y() > y1) {
+          std::fprintf(stderr, "outside: tri %d %d %d choice %d tri#%zu a=(%g,%g) b=(%g,%g) c=(%g,%g)\n", a, b, c,
+                       last_choice_, triangles_.size(), N_.params[a].x(), N_.params[a].y(),
+                       N_.params[b].x(), N_.params[b].y(), N_.params[c].x(), N_.params[c].y());
+          const Frame f = frame_of(a, b);
+          std::fprintf(stderr, "  local a (%g %g) b (%g %g) c (%g %g) n.na %g n.nb %g\n", f(N_.pos[a]).x(), f(N_.pos[a]).y(), f(N_.pos[b]).x(), f(N_.pos[b]).y(), f(N_.pos[c]).x(), f(N_.pos[c]).y(), f.n.dot(N_.normal[a]), f.n.dot(N_.normal[b]));
+          for (int id : alive_) if (edges_[id].alive) { const auto& E = edges_[id]; if ((N_.pos[E.a]-f.M).norm() < 12) std::fprintf(stderr, "   front %d->%d (%g %g)->(%g %g) param (%g %g)\n", E.a, E.b, f(N_.pos[E.a]).x(), f(N_.pos[E.a]).y(), f(N_.pos[E.b]).x(), f(N_.pos[E.b]).y(), N_.params[E.a].x(), N_.params[E.a].y()); }
+          std::abort();
+        }
+      }
+    }
     triangles_.push_back({a, b, c});
     kill(e);
     if (const int r = find(c, a); r >= 0)
@@ -326,7 +397,18 @@ class Mesher {
     return r;
   }
 
+  Frame frame_of(int a, int b) const {
+    Frame f;
+    f.M = 0.5 * (N_.pos[a] + N_.pos[b]);
+    f.n = (N_.normal[a] + N_.normal[b]).normalized();
+    const Vector3d ab = N_.pos[b] - N_.pos[a];
+    f.t1 = (ab - ab.dot(f.n) * f.n).normalized();
+    f.t2 = f.n.cross(f.t1);
+    return f;
+  }
+
   bool try_edge(int e, bool relaxed) {
+    relaxed_ = relaxed;
     const int a = edges_[e].a, b = edges_[e].b;
     const Vector3d& A = N_.pos[a];
     const Vector3d& B = N_.pos[b];
@@ -346,10 +428,21 @@ class Mesher {
     const double half = 0.5 * (f(B) - f(A)).norm();
     // Existing candidates ordered by their circumcentre on the bisector (Delaunay rule).
     std::vector<std::pair<double, int>> cand;
+    const double rho = std::max(1e-6, std::hypot(f.M.x(), f.M.y()));
+    auto pp = [&](int v) {
+      return Vector2d(rho * std::remainder(N_.params[v].x() - N_.params[a].x(), 2 * M_PI),
+                      N_.params[v].y() - N_.params[a].y());
+    };
+    const Vector2d pb = pp(b);
     for (int v : nr.nodes) {
       if (v == a || v == b) continue;
-      const Vector2d P = f(N_.pos[v]);
-      if (P.y() <= 1e-9 * el) continue;
+      if (cross2(pb, pp(v)) <= 1e-9 * el * el) continue;  // not left of the edge
+      if (!relaxed && N_.normal[v].dot(f.n) < 0.2) continue;
+      Vector2d P = f(N_.pos[v]);
+      if (P.y() <= 1e-6 * el) {
+        if (!relaxed) continue;
+        P.y() = 1e-6 * el;
+      }
       cand.push_back({(P.squaredNorm() - half * half) / (2 * P.y()), v});
     }
     std::sort(cand.begin(), cand.end());
@@ -357,12 +450,13 @@ class Mesher {
     double s_c = 0;
     const std::size_t tries = relaxed ? cand.size() : std::min<std::size_t>(cand.size(), 8);
     for (std::size_t k = 0; k < tries; ++k)
-      if (visible(a, b, cand[k].second, N_.pos[cand[k].second], f, nr)) {
+      if (visible(a, b, cand[k].second, N_.pos[cand[k].second], N_.params[cand[k].second], f, nr)) {
         s_node = cand[k].second;
         s_c = cand[k].first;
         break;
       }
     if (relaxed && s_node >= 0) {
+      last_choice_ = 9;
       add_triangle(e, s_node);
       ++stats_.chose_existing;
       return true;
@@ -391,10 +485,11 @@ class Mesher {
       if (!jet) return false;
       const Vector3d pos = jet->position;
       if (jet->normal().dot(f.n) < 0.2) return false;
-      if (!clear_of_front(pos, u, e, nr) || !visible(a, b, -1, pos, f, nr)) return false;
+      if (!clear_of_front(pos, u, e, nr) || !visible(a, b, -1, pos, p, f, nr)) return false;
       if (min_angle(A, B, pos) < 0.35) return false;  // ~20 deg: never build a sliver
       const int c = N_.add(p, S_);
       if (c < 0) return false;
+      last_choice_ = choice;
       add_triangle(e, c);
       ++stats_.steiner_points;
       return true;
@@ -412,6 +507,7 @@ class Mesher {
       return true;
     }
     if (s_node >= 0) {
+      last_choice_ = 10 + choice;
       add_triangle(e, s_node);
       ++stats_.chose_existing;
       return true;
@@ -435,6 +531,8 @@ class Mesher {
   std::priority_queue<std::pair<double, int>> heap_;
   std::vector<std::array<int, 3>> triangles_;
   bool progress_ = false;
+  int last_choice_ = -1;
+  bool relaxed_ = false;
 };
 
 }  // namespace

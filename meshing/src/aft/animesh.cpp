@@ -119,6 +119,8 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
   for (std::size_t r = 0; r < g.regions.size(); ++r) {
     const Region& reg = g.regions[r];
     if (reg.opening) continue;
+    if (const char* only = std::getenv("SCANMESH_AFT_ONLY"); only && std::atoi(only) != static_cast<int>(r))
+      continue;
     detail::RegionMeshInput in;
     in.unit_mm = reg.unit_mm > 0 ? reg.unit_mm : settings.default_unit_mm;
     in.strategy = settings.strategy;
@@ -129,6 +131,7 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
       in.max_steps = std::strtoul(m, nullptr, 10);
     std::vector<int> cycles{reg.outer};
     cycles.insert(cycles.end(), reg.inner.begin(), reg.inner.end());
+    for (int c : cycles) in.polygons.push_back(g.cycle_polygon(c));
     for (int c : cycles)
       for (const HalfEdgeRef& he : g.cycles[c].edges) {
         std::vector<int> chain = seg.chains[he.segment];
