@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <queue>
+#include <set>
 #include <unordered_map>
 
 #include "aft_internal.h"
@@ -329,7 +330,10 @@ class Mesher {
     for (int v : nr.nodes) {
       if (v == a || v == b || v == c) continue;
       const Vector2d P = P2(v);
-      if (cross2(B - A, P - A) > eps && cross2(C - B, P - B) > eps && cross2(A - C, P - C) > eps)
+      // Inside or on a side: a node on a new side (e.g. the middle one of three collinear
+      // boundary nodes) would be skipped by the new edge and leave a zero-area front loop.
+      const double tol = 1e-7 * scale * scale;
+      if (cross2(B - A, P - A) > -tol && cross2(C - B, P - B) > -tol && cross2(A - C, P - C) > -tol)
         return false;
     }
     return true;
@@ -364,6 +368,7 @@ class Mesher {
         }
       }
     }
+    if (std::getenv("SCANMESH_AFT_OVERLAP")) check_overlap(a, b, c);
     triangles_.push_back({a, b, c});
     kill(e);
     if (const int r = find(c, a); r >= 0)
@@ -395,6 +400,50 @@ class Mesher {
       if (const auto p = S_.project(f.M + height * f.t2)) r = p->point;
     }
     return r;
+  }
+
+  void check_overlap(int a, int b, int c) {
+    const double rho = std::hypot(N_.pos[a].x(), N_.pos[a].y());
+    auto P = [&](int v) {
+      return Vector2d(rho * std::remainder(N_.params[v].x() - N_.params[a].x(), 2 * M_PI),
+                      N_.params[v].y() - N_.params[a].y());
+    };
+    const std::array<int, 3> t{a, b, c};
+    for (std::size_t k = 0; k < triangles_.size(); ++k) {
+      const auto& o = triangles_[k];
+      if ((N_.pos[o[0]] - N_.pos[a]).norm() > 40) continue;
+      // overlap if any vertex strictly inside the other or edges properly cross
+      bool bad = false;
+      for (int i = 0; i < 3 && !bad; ++i)
+        for (int j = 0; j < 3 && !bad; ++j) {
+          const int p1 = t[i], p2 = t[(i + 1) % 3], q1 = o[j], q2 = o[(j + 1) % 3];
+          if (p1 == q1 || p1 == q2 || p2 == q1 || p2 == q2) continue;
+          if (segments_cross(P(p1), P(p2), P(q1), P(q2), 1e-12)) bad = true;
+        }
+      auto inside = [&](const std::array<int, 3>& T, int v) {
+        if (v == T[0] || v == T[1] || v == T[2]) return false;
+        const Vector2d A = P(T[0]), B = P(T[1]), C = P(T[2]), X = P(v);
+        return cross2(B - A, X - A) > 1e-12 && cross2(C - B, X - B) > 1e-12 && cross2(A - C, X - C) > 1e-12;
+      };
+      for (int i = 0; i < 3; ++i) bad |= inside(t, o[i]) || inside(o, t[i]);
+      const std::set<int> st(t.begin(), t.end()), so(o.begin(), o.end());
+      if (st == so) bad = true;
+      if (bad) {
+        std::fprintf(stderr, "OVERLAP new #%zu (%d %d %d) with #%zu (%d %d %d) choice %d relaxed %d\n",
+                     triangles_.size(), a, b, c, k, o[0], o[1], o[2], last_choice_, int(relaxed_));
+        for (int v : {a, b, c, o[0], o[1], o[2]})
+          std::fprintf(stderr, "  %d: P (%g %g)\n", v, P(v).x(), P(v).y());
+        for (const auto& E : edges_)
+          if (E.alive && (E.a == a || E.b == a || E.a == b || E.b == b || E.a == c || E.b == c))
+            std::fprintf(stderr, "  front %d->%d  (%g %g)->(%g %g)\n", E.a, E.b, P(E.a).x(), P(E.a).y(), P(E.b).x(), P(E.b).y());
+        for (std::size_t k2 = 0; k2 < triangles_.size(); ++k2) {
+          const auto& o2 = triangles_[k2];
+          if (o2[0] == b || o2[1] == b || o2[2] == b)
+            std::fprintf(stderr, "  tri #%zu %d %d %d\n", k2, o2[0], o2[1], o2[2]);
+        }
+        std::abort();
+      }
+    }
   }
 
   Frame frame_of(int a, int b) const {

@@ -131,7 +131,21 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
       in.max_steps = std::strtoul(m, nullptr, 10);
     std::vector<int> cycles{reg.outer};
     cycles.insert(cycles.end(), reg.inner.begin(), reg.inner.end());
-    for (int c : cycles) in.polygons.push_back(g.cycle_polygon(c));
+    // The region as the polygon of its boundary nodes (the chords the front starts from, not
+    // the curves: a chord cutting a curved opening's corner must not count as leaving).
+    for (int c : cycles) {
+      std::vector<Vector2d> poly;
+      for (const HalfEdgeRef& he : g.cycles[c].edges) {
+        std::vector<int> chain = seg.chains[he.segment];
+        if (!he.forward) std::reverse(chain.begin(), chain.end());
+        for (std::size_t k = 0; k + 1 < chain.size(); ++k) {
+          Vector2d p = seg.params[chain[k]];
+          if (!poly.empty()) p.x() = poly.back().x() + std::remainder(p.x() - poly.back().x(), 2 * M_PI);
+          poly.push_back(p);
+        }
+      }
+      in.polygons.push_back(poly);
+    }
     for (int c : cycles)
       for (const HalfEdgeRef& he : g.cycles[c].edges) {
         std::vector<int> chain = seg.chains[he.segment];
@@ -364,8 +378,15 @@ AnimationMeshQuality evaluate_quality(const AnimationMesh& am, const ScanSurface
       for (int j = 0; i + j <= n; ++j) {
         const double u = double(i) / n, v = double(j) / n, w = 1 - u - v;
         const Vector3d x = w * P[f[0]] + u * P[f[1]] + v * P[f[2]];
-        if (const auto pr = surface.project(x))
-          q.hausdorff_mesh_to_surface_mm = std::max(q.hausdorff_mesh_to_surface_mm, pr->distance);
+        // Closest-point projection can stop in a far local minimum (e.g. behind an ear); the
+        // radial foot point bounds the true distance from above.
+        double dist = 1e300;
+        if (const auto pr = surface.project(x)) dist = pr->distance;
+        {
+          const double phi = std::atan2(x.y(), x.x());
+          if (const auto y = surface.position(phi, x.z())) dist = std::min(dist, (*y - x).norm());
+        }
+        if (dist < 1e299) q.hausdorff_mesh_to_surface_mm = std::max(q.hausdorff_mesh_to_surface_mm, dist);
         const Vector2d pp = w * pa + u * pb + v * pc;
         if (const auto y = surface.position(pp.x(), pp.y())) {
           double d = 1e300;
