@@ -136,9 +136,10 @@ class Mesher {
             stats_.unmeshed_front_edges = static_cast<int>(live.size());
             if (std::getenv("SCANMESH_AFT_DEBUG"))
               for (int d : live)
-                std::fprintf(stderr, "left: %d->%d (%.5f %.4f)->(%.5f %.4f) n.n %g\n", edges_[d].a, edges_[d].b,
-                             N_.params[edges_[d].a].x(), N_.params[edges_[d].a].y(),
-                             N_.params[edges_[d].b].x(), N_.params[edges_[d].b].y(), N_.normal[edges_[d].a].dot(N_.normal[edges_[d].b]));
+                std::fprintf(stderr, "left: %d->%d (%.5f %.4f)->(%.5f %.4f) n.n %g\n", edges_[d].a,
+                             edges_[d].b, N_.params[edges_[d].a].x(), N_.params[edges_[d].a].y(),
+                             N_.params[edges_[d].b].x(), N_.params[edges_[d].b].y(),
+                             N_.normal[edges_[d].a].dot(N_.normal[edges_[d].b]));
             break;
           }
           relaxed = true;
@@ -257,8 +258,7 @@ class Mesher {
       // every near edge takes part in the tests, whatever its normal
       nr.edges.push_back(id);
       for (int v : {e.a, e.b})
-        if ((N_.pos[v] - f.M).squaredNorm() < r2)
-          nr.nodes.push_back(v);
+        if ((N_.pos[v] - f.M).squaredNorm() < r2) nr.nodes.push_back(v);
     }
     if (compact.size() * 2 < alive_.size()) alive_.swap(compact);
     std::sort(nr.nodes.begin(), nr.nodes.end());
@@ -358,12 +358,23 @@ class Mesher {
         Vector2d cp = N_.params[c];
         cp.x() = x0 + std::fmod(std::fmod(cp.x() - x0, 2 * M_PI) + 2 * M_PI, 2 * M_PI);
         if (cp.x() < x0 || cp.x() > x1 || cp.y() < y0 || cp.y() > y1) {
-          std::fprintf(stderr, "outside: tri %d %d %d choice %d tri#%zu a=(%g,%g) b=(%g,%g) c=(%g,%g)\n", a, b, c,
-                       last_choice_, triangles_.size(), N_.params[a].x(), N_.params[a].y(),
+          std::fprintf(stderr,
+                       "outside: tri %d %d %d choice %d tri#%zu a=(%g,%g) b=(%g,%g) c=(%g,%g)\n", a,
+                       b, c, last_choice_, triangles_.size(), N_.params[a].x(), N_.params[a].y(),
                        N_.params[b].x(), N_.params[b].y(), N_.params[c].x(), N_.params[c].y());
           const Frame f = frame_of(a, b);
-          std::fprintf(stderr, "  local a (%g %g) b (%g %g) c (%g %g) n.na %g n.nb %g\n", f(N_.pos[a]).x(), f(N_.pos[a]).y(), f(N_.pos[b]).x(), f(N_.pos[b]).y(), f(N_.pos[c]).x(), f(N_.pos[c]).y(), f.n.dot(N_.normal[a]), f.n.dot(N_.normal[b]));
-          for (int id : alive_) if (edges_[id].alive) { const auto& E = edges_[id]; if ((N_.pos[E.a]-f.M).norm() < 12) std::fprintf(stderr, "   front %d->%d (%g %g)->(%g %g) param (%g %g)\n", E.a, E.b, f(N_.pos[E.a]).x(), f(N_.pos[E.a]).y(), f(N_.pos[E.b]).x(), f(N_.pos[E.b]).y(), N_.params[E.a].x(), N_.params[E.a].y()); }
+          std::fprintf(stderr, "  local a (%g %g) b (%g %g) c (%g %g) n.na %g n.nb %g\n",
+                       f(N_.pos[a]).x(), f(N_.pos[a]).y(), f(N_.pos[b]).x(), f(N_.pos[b]).y(),
+                       f(N_.pos[c]).x(), f(N_.pos[c]).y(), f.n.dot(N_.normal[a]),
+                       f.n.dot(N_.normal[b]));
+          for (int id : alive_)
+            if (edges_[id].alive) {
+              const auto& E = edges_[id];
+              if ((N_.pos[E.a] - f.M).norm() < 12)
+                std::fprintf(stderr, "   front %d->%d (%g %g)->(%g %g) param (%g %g)\n", E.a, E.b,
+                             f(N_.pos[E.a]).x(), f(N_.pos[E.a]).y(), f(N_.pos[E.b]).x(),
+                             f(N_.pos[E.b]).y(), N_.params[E.a].x(), N_.params[E.a].y());
+            }
           std::abort();
         }
       }
@@ -423,19 +434,22 @@ class Mesher {
       auto inside = [&](const std::array<int, 3>& T, int v) {
         if (v == T[0] || v == T[1] || v == T[2]) return false;
         const Vector2d A = P(T[0]), B = P(T[1]), C = P(T[2]), X = P(v);
-        return cross2(B - A, X - A) > 1e-12 && cross2(C - B, X - B) > 1e-12 && cross2(A - C, X - C) > 1e-12;
+        return cross2(B - A, X - A) > 1e-12 && cross2(C - B, X - B) > 1e-12 &&
+               cross2(A - C, X - C) > 1e-12;
       };
       for (int i = 0; i < 3; ++i) bad |= inside(t, o[i]) || inside(o, t[i]);
       const std::set<int> st(t.begin(), t.end()), so(o.begin(), o.end());
       if (st == so) bad = true;
       if (bad) {
-        std::fprintf(stderr, "OVERLAP new #%zu (%d %d %d) with #%zu (%d %d %d) choice %d relaxed %d\n",
+        std::fprintf(stderr,
+                     "OVERLAP new #%zu (%d %d %d) with #%zu (%d %d %d) choice %d relaxed %d\n",
                      triangles_.size(), a, b, c, k, o[0], o[1], o[2], last_choice_, int(relaxed_));
         for (int v : {a, b, c, o[0], o[1], o[2]})
           std::fprintf(stderr, "  %d: P (%g %g)\n", v, P(v).x(), P(v).y());
         for (const auto& E : edges_)
           if (E.alive && (E.a == a || E.b == a || E.a == b || E.b == b || E.a == c || E.b == c))
-            std::fprintf(stderr, "  front %d->%d  (%g %g)->(%g %g)\n", E.a, E.b, P(E.a).x(), P(E.a).y(), P(E.b).x(), P(E.b).y());
+            std::fprintf(stderr, "  front %d->%d  (%g %g)->(%g %g)\n", E.a, E.b, P(E.a).x(),
+                         P(E.a).y(), P(E.b).x(), P(E.b).y());
         for (std::size_t k2 = 0; k2 < triangles_.size(); ++k2) {
           const auto& o2 = triangles_[k2];
           if (o2[0] == b || o2[1] == b || o2[2] == b)

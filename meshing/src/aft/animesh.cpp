@@ -119,7 +119,8 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
   for (std::size_t r = 0; r < g.regions.size(); ++r) {
     const Region& reg = g.regions[r];
     if (reg.opening) continue;
-    if (const char* only = std::getenv("SCANMESH_AFT_ONLY"); only && std::atoi(only) != static_cast<int>(r))
+    if (const char* only = std::getenv("SCANMESH_AFT_ONLY");
+        only && std::atoi(only) != static_cast<int>(r))
       continue;
     detail::RegionMeshInput in;
     in.unit_mm = reg.unit_mm > 0 ? reg.unit_mm : settings.default_unit_mm;
@@ -140,7 +141,8 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
         if (!he.forward) std::reverse(chain.begin(), chain.end());
         for (std::size_t k = 0; k + 1 < chain.size(); ++k) {
           Vector2d p = seg.params[chain[k]];
-          if (!poly.empty()) p.x() = poly.back().x() + std::remainder(p.x() - poly.back().x(), 2 * M_PI);
+          if (!poly.empty())
+            p.x() = poly.back().x() + std::remainder(p.x() - poly.back().x(), 2 * M_PI);
           poly.push_back(p);
         }
       }
@@ -386,7 +388,8 @@ AnimationMeshQuality evaluate_quality(const AnimationMesh& am, const ScanSurface
           const double phi = std::atan2(x.y(), x.x());
           if (const auto y = surface.position(phi, x.z())) dist = std::min(dist, (*y - x).norm());
         }
-        if (dist < 1e299) q.hausdorff_mesh_to_surface_mm = std::max(q.hausdorff_mesh_to_surface_mm, dist);
+        if (dist < 1e299)
+          q.hausdorff_mesh_to_surface_mm = std::max(q.hausdorff_mesh_to_surface_mm, dist);
         const Vector2d pp = w * pa + u * pb + v * pc;
         if (const auto y = surface.position(pp.x(), pp.y())) {
           double d = 1e300;

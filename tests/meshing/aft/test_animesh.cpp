@@ -86,3 +86,46 @@ TEST(AnimationMesh, IdenticalForIdenticalInputAndSeed) {
 
 }  // namespace
 }  // namespace scanmesh::aft
+
+// The sample head (configs/sim/head-lines.svg + head-regions.yaml) on the simulated head scanned
+// without occlusion/hair defects (configs/sim/head-scanner-ideal.yaml).
+#include "scanmesh/sim/range_scanner.h"
+#include "scanmesh/sim/scene.h"
+
+namespace scanmesh::aft {
+namespace {
+
+TEST(AnimationMeshHead, SampleLinesGiveAValidMesh) {
+  const auto config = sim::ScannerConfig::from_yaml_file(std::string(SCANMESH_SOURCE_DIR) +
+                                                         "/configs/sim/head-scanner-ideal.yaml");
+  const sim::SimulatedScan scan = sim::simulate_scan(sim::builtin_head_scene(), config);
+  const ScanSurface surface(scan.grid);
+  const LineSet lines =
+      read_lines(std::string(SCANMESH_SOURCE_DIR) + "/configs/sim/head-lines.svg");
+  validate_lines(lines, surface);
+  RegionGraph g = analyze_regions(lines, surface);
+  int meshed = 0, openings = 0;
+  for (const Region& r : g.regions) (r.opening ? openings : meshed)++;
+  EXPECT_EQ(meshed, 17);
+  EXPECT_EQ(openings, 3);
+  const RegionSettings s =
+      read_region_settings(std::string(SCANMESH_SOURCE_DIR) + "/configs/sim/head-regions.yaml");
+  apply_region_settings(g, s, surface);
+  const AnimationMesh am = build_animation_mesh(g, lines, surface, s);
+  const MeshCheckReport rep = check_mesh(am.mesh);
+  EXPECT_TRUE(rep.edge_manifold()) << rep.to_text();
+  EXPECT_EQ(rep.duplicate_faces, 0u);
+  EXPECT_EQ(rep.self_intersections, 0u);
+  const AnimationMeshQuality q = evaluate_quality(am, surface, 2);
+  EXPECT_LT(q.max_vertex_offset_mm, 0.01);
+  EXPECT_GE(q.fraction_min_angle_ge_30, 0.95) << q.to_text();
+  // Known gap (docs/animation-meshes.md): the right ear's steep base leaves a few front edges
+  // open and the worst triangles are below 20 deg there; the issue's >= 20 deg everywhere is not
+  // reached yet. Count the open edges so a regression shows.
+  int open_edges = 0;
+  for (const auto& st : am.region_stats) open_edges += st.unmeshed_front_edges;
+  EXPECT_LE(open_edges, 12);
+}
+
+}  // namespace
+}  // namespace scanmesh::aft
