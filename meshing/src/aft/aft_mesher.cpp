@@ -565,6 +565,8 @@ class Mesher {
         return true;
       }
     }
+    // An existing candidate that would make a sliver (< ~20 deg) gives way to R if R is valid.
+    if (choice == kS && s_node >= 0 && r && min_angle(A, B, N_.pos[s_node]) < 0.35) choice = kR;
     if (choice == kR && r && try_new(*r)) {
       ++stats_.chose_new;
       return true;
