@@ -113,6 +113,10 @@ class Mesher {
       : N_(nodes), S_(surface), in_(in), stats_(stats), rng_(in.seed * 0x9E3779B97F4A7C15ull + 1) {}
 
   std::vector<std::array<int, 3>> run() {
+    double longest = in_.unit_mm;
+    for (const auto& e : in_.front)
+      longest = std::max(longest, (N_.pos[e[1]] - N_.pos[e[0]]).norm());
+    cell_ = std::max(1e-3, 2.5 * longest);
     for (const auto& e : in_.front) add_edge(e[0], e[1]);
     std::vector<int> deferred;
     bool relaxed = false;
@@ -181,6 +185,7 @@ class Mesher {
     edges_.push_back({a, b, true, (N_.pos[b] - N_.pos[a]).norm()});
     index_[edge_key(a, b)] = id;
     alive_.push_back(id);
+    bucket(id);
     push(id);
   }
   void kill(int id) {
@@ -242,25 +247,50 @@ class Mesher {
     std::vector<int> edges;  // alive front edges near the edge
   };
 
+  // Front edges bucketed by the cell of their midpoint (lazy deletion), so the search near an
+  // edge costs O(local front) instead of O(front).
+  std::int64_t cell_key(const Vector3d& x) const {
+    const auto c = [&](double v) {
+      return static_cast<std::int64_t>(std::floor(v / cell_)) & 0x1fffff;
+    };
+    return (c(x.x()) << 42) | (c(x.y()) << 21) | c(x.z());
+  }
+  void bucket(int id) {
+    const FEdge& e = edges_[id];
+    max_len_ = std::max(max_len_, e.length);
+    grid_[cell_key(0.5 * (N_.pos[e.a] + N_.pos[e.b]))].push_back(id);
+  }
+
   Near gather(int self, const Frame& f, double radius) {
     Near nr;
-    std::vector<int> compact;
     const double r2 = radius * radius;
-    for (int id : alive_) {
-      if (!edges_[id].alive) continue;
-      compact.push_back(id);
-      if (id == self) continue;
-      const FEdge& e = edges_[id];
-      const Vector3d& p = N_.pos[e.a];
-      const Vector3d& q = N_.pos[e.b];
-      const double lim = radius + e.length;
-      if ((p - f.M).squaredNorm() > lim * lim && (q - f.M).squaredNorm() > lim * lim) continue;
-      // every near edge takes part in the tests, whatever its normal
-      nr.edges.push_back(id);
-      for (int v : {e.a, e.b})
-        if ((N_.pos[v] - f.M).squaredNorm() < r2) nr.nodes.push_back(v);
-    }
-    if (compact.size() * 2 < alive_.size()) alive_.swap(compact);
+    const double reach = radius + 0.5 * max_len_;
+    const int n = static_cast<int>(std::ceil(reach / cell_));
+    for (int dx = -n; dx <= n; ++dx)
+      for (int dy = -n; dy <= n; ++dy)
+        for (int dz = -n; dz <= n; ++dz) {
+          const auto it = grid_.find(cell_key(f.M + cell_ * Vector3d(dx, dy, dz)));
+          if (it == grid_.end()) continue;
+          auto& list = it->second;
+          std::size_t keep = 0;
+          for (std::size_t k = 0; k < list.size(); ++k) {
+            const int id = list[k];
+            if (!edges_[id].alive) continue;
+            list[keep++] = id;
+            if (id == self) continue;
+            const FEdge& e = edges_[id];
+            const Vector3d& p = N_.pos[e.a];
+            const Vector3d& q = N_.pos[e.b];
+            const double lim = radius + e.length;
+            if ((p - f.M).squaredNorm() > lim * lim && (q - f.M).squaredNorm() > lim * lim)
+              continue;
+            nr.edges.push_back(id);
+            for (int v : {e.a, e.b})
+              if ((N_.pos[v] - f.M).squaredNorm() < r2) nr.nodes.push_back(v);
+          }
+          list.resize(keep);
+        }
+    std::sort(nr.edges.begin(), nr.edges.end());
     std::sort(nr.nodes.begin(), nr.nodes.end());
     nr.nodes.erase(std::unique(nr.nodes.begin(), nr.nodes.end()), nr.nodes.end());
     return nr;
@@ -592,6 +622,8 @@ class Mesher {
   std::vector<FEdge> edges_;
   std::unordered_map<std::uint64_t, int> index_;
   std::vector<int> alive_;
+  double cell_ = 1.0, max_len_ = 0.0;
+  std::unordered_map<std::int64_t, std::vector<int>> grid_;
   std::vector<int> pool_;
   std::priority_queue<std::pair<double, int>> heap_;
   std::vector<std::array<int, 3>> triangles_;
