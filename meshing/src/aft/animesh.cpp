@@ -384,10 +384,12 @@ AnimationMeshQuality evaluate_quality(const AnimationMesh& am, const ScanSurface
         // radial foot point bounds the true distance from above.
         double dist = 1e300;
         if (const auto pr = surface.project(x)) dist = pr->distance;
-        {
-          const double phi = std::atan2(x.y(), x.x());
-          if (const auto y = surface.position(phi, x.z())) dist = std::min(dist, (*y - x).norm());
-        }
+        if (const auto im = surface.implicit(x)) dist = std::min(dist, std::fabs(im->value));
+        // The surface point over the sample's (phi, h) is a third upper bound (tight where the
+        // first two fail: near-horizontal parts such as the crown).
+        const Vector2d pp0 = w * pa + u * pb + v * pc;
+        if (const auto y0 = surface.position(pp0.x(), pp0.y()))
+          dist = std::min(dist, (*y0 - x).norm());
         if (dist < 1e299)
           q.hausdorff_mesh_to_surface_mm = std::max(q.hausdorff_mesh_to_surface_mm, dist);
         const Vector2d pp = w * pa + u * pb + v * pc;
