@@ -548,7 +548,7 @@ class Mesher {
         s_c = cand[k].first;
         break;
       }
-    if (relaxed && s_node >= 0) {
+    if (relaxed && s_node >= 0 && min_angle(A, B, N_.pos[s_node]) >= 0.35) {
       last_choice_ = 9;
       add_triangle(e, s_node);
       ++stats_.chose_existing;
@@ -577,7 +577,7 @@ class Mesher {
       const auto jet = S_.evaluate(p.x(), p.y());
       if (!jet) return false;
       const Vector3d pos = jet->position;
-      if (jet->normal().dot(f.n) < 0.2) return false;
+      if (!relaxed && jet->normal().dot(f.n) < 0.2) return false;
       if (!clear_of_front(pos, u, e, nr) || !visible(a, b, -1, pos, p, f, nr)) return false;
       if (min_angle(A, B, pos) < 0.35) return false;  // ~20 deg: never build a sliver
       const int c = N_.add(p, S_);
@@ -600,6 +600,17 @@ class Mesher {
     if (choice == kR && r && try_new(*r)) {
       ++stats_.chose_new;
       return true;
+    }
+    // No usable S, or S would make a sliver: try a lower apex (the thesis's shrink by a third,
+    // twice) before giving in.
+    if (s_node < 0 || min_angle(A, B, N_.pos[s_node]) < 0.35) {
+      for (double shrink : {2.0 / 3.0, 4.0 / 9.0}) {
+        const auto r2 = construct_r(f, std::max(height * shrink, 0.45 * el));
+        if (r2 && try_new(*r2)) {
+          ++stats_.chose_new;
+          return true;
+        }
+      }
     }
     if (s_node >= 0) {
       last_choice_ = 10 + choice;
