@@ -80,7 +80,7 @@ int delaunay_flips(std::vector<std::array<int, 3>>& T, const std::vector<Vector3
       auto faces_out = [&](int x, int y, int z) {
         const Vector3d n = (P[y] - P[x]).cross(P[z] - P[x]);
         const Vector3d m = normal[x] + normal[y] + normal[z];
-        return n.dot(m) > 0.3 * n.norm() * m.norm();
+        return n.dot(m) > 0.05 * n.norm() * m.norm();
       };
       if (!faces_out(r, a, s) || !faces_out(s, b, r)) continue;
       T[t1] = {r, a, s};
