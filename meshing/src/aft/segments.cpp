@@ -168,7 +168,11 @@ SegmentNodes initialise_segments(const RegionGraph& g, const LineSet& lines,
                 const Vector3d d = pos[i] - pos[j];
                 const double dist = d.norm();
                 if (dist >= reach || dist < 1e-12) continue;
-                push += (reach - dist) * d.dot(tangent) / dist;
+                double along = d.dot(tangent) / dist;
+                // Exactly facing nodes feel no tangential push: break the tie by segment order
+                // so one of the two rails gives way (deterministic).
+                if (std::fabs(along) < 0.1) along = owner[j] < static_cast<int>(s) ? 0.5 : -0.5;
+                push += (reach - dist) * along;
               }
             }
         const double gap = arc[k + 1] - arc[k - 1];

@@ -2,8 +2,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 
 #include "aft_test_support.h"
+#include "scanmesh/meshing/aft/animesh.h"
 #include "scanmesh/meshing/aft/regions.h"
 
 namespace scanmesh::aft {
@@ -118,6 +120,80 @@ TEST_F(Regions, EndPointsSnapOntoLines) {
       "<path d='M 50 120 L 199 120'/>");
   EXPECT_EQ(g.regions.size(), 2u);
   EXPECT_TRUE(g.dangling_ends.empty());
+}
+
+}  // namespace
+}  // namespace scanmesh::aft
+
+// Segment initialisation (seed 000 §5.1.2) on a plain cylinder r = 100 mm, where 3D arc length
+// along a line of constant h is r * dphi exactly.
+namespace scanmesh::aft {
+namespace {
+
+TEST(SegmentInit, EquidistantNodeCountAndSpacing) {
+  const RangeGrid grid = test::cylinder_grid(100.0, 0.0);
+  const ScanSurface surface(grid);
+  const LineSet lines = parse_lines_svg("<svg><path d='M 50 200 L 150 200'/></svg>", "t.svg");
+  const RegionGraph g = analyze_regions(lines, surface);
+  RegionSettings s;
+  s.default_unit_mm = 10.0;
+  const SegmentNodes nodes = initialise_segments(g, lines, surface, s);
+  ASSERT_EQ(nodes.chains.size(), 1u);
+  const double arc = 100.0 * 100 * 2 * M_PI / 512;  // s
+  const int n_nodes = static_cast<int>(std::floor(arc / 10.0)) + 2;
+  EXPECT_EQ(static_cast<int>(nodes.chains[0].size()), n_nodes);
+  const double d_prime = arc / (std::floor(arc / 10.0) + 1);
+  EXPECT_NEAR(nodes.spacing_mm[0], d_prime, 1e-3);
+  for (std::size_t k = 0; k + 1 < nodes.chains[0].size(); ++k) {
+    const double dphi =
+        nodes.params[nodes.chains[0][k + 1]].x() - nodes.params[nodes.chains[0][k]].x();
+    EXPECT_NEAR(100.0 * dphi, d_prime, 1e-3);  // arc between nodes
+  }
+}
+
+TEST(SegmentInit, CurvatureModePutsMoreNodesWhereTheLineTurns) {
+  const RangeGrid grid = test::cylinder_grid(100.0, 0.0);
+  const ScanSurface surface(grid);
+  // A zig-zag: straight parts and sharp turns.
+  const LineSet lines = parse_lines_svg(
+      "<svg><path d='M 50 100 L 70 150 L 90 100 L 110 150 L 130 100'/></svg>", "t.svg");
+  const RegionGraph g = analyze_regions(lines, surface);
+  RegionSettings s;
+  s.default_unit_mm = 10.0;
+  s.relax_iterations = 0;
+  const auto eq = initialise_segments(g, lines, surface, s);
+  s.segment_init = SegmentInit::Curvature;
+  const auto cu = initialise_segments(g, lines, surface, s);
+  EXPECT_GT(cu.chains[0].size(), eq.chains[0].size());
+}
+
+TEST(SegmentInit, RelaxationOffsetsNodesOnCloseParallelLines) {
+  const RangeGrid grid = test::cylinder_grid(100.0, 0.0);
+  const ScanSurface surface(grid);
+  // Two parallel lines 6 rows (3 mm) apart, nodes about 9.4 mm apart: initially aligned.
+  const LineSet lines = parse_lines_svg(
+      "<svg><path d='M 50 200 L 150 200'/><path d='M 50 206 L 150 206'/></svg>", "t.svg");
+  const RegionGraph g = analyze_regions(lines, surface);
+  RegionSettings s;
+  s.default_unit_mm = 10.0;
+  auto min_cross_distance = [&](const SegmentNodes& n) {
+    double best = 1e300;
+    for (int i : n.chains[0])
+      for (int j : n.chains[1]) {
+        if (i == n.chains[0].front() || i == n.chains[0].back()) continue;
+        if (j == n.chains[1].front() || j == n.chains[1].back()) continue;
+        const auto a = surface.position(n.params[i].x(), n.params[i].y());
+        const auto b = surface.position(n.params[j].x(), n.params[j].y());
+        best = std::min(best, (*a - *b).norm());
+      }
+    return best;
+  };
+  s.relax_iterations = 0;
+  const double before = min_cross_distance(initialise_segments(g, lines, surface, s));
+  s.relax_iterations = 30;
+  const double after = min_cross_distance(initialise_segments(g, lines, surface, s));
+  EXPECT_NEAR(before, 3.0, 0.05);  // 6 rows of 0.5 mm
+  EXPECT_GT(after, before + 1.0);
 }
 
 }  // namespace
