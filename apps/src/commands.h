@@ -150,3 +150,8 @@ void register_vision_commands(CLI::App& app, CommandList& commands);
 namespace scanmesh::cli {
 void register_devices_commands(CLI::App& app, CommandList& commands);
 }  // namespace scanmesh::cli
+
+// --- animation meshes (seed 000): apps/src/cmd_aft.cpp ---
+namespace scanmesh::cli {
+void register_aft_commands(CLI::App& app, CommandList& commands);
+}  // namespace scanmesh::cli

@@ -187,6 +187,7 @@ int main(int argc, char** argv) {
   CommandList commands;
   register_vision_commands(app, commands);
   register_devices_commands(app, commands);
+  register_aft_commands(app, commands);
 
   try {
     app.parse(argc, argv);

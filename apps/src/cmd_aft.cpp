@@ -1,0 +1,266 @@
+// `scanmesh regions` and `scanmesh animesh`: seed 000's animation meshes (docs/animation-meshes.md,
+// docs/cli.md).
+#include <CLI/CLI.hpp>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "cli_support.h"
+#include "commands.h"
+#include "scanmesh/core/atomic_file.h"
+#include "scanmesh/core/errors.h"
+#include "scanmesh/core/grid_export.h"
+#include "scanmesh/core/grid_file.h"
+#include "scanmesh/core/image.h"
+#include "scanmesh/core/mesh_io.h"
+#include "scanmesh/core/render.h"
+#include "scanmesh/meshing/aft/animesh.h"
+#include "scanmesh/meshing/mesh_check.h"
+#include "scanmesh/reconstruction/curvature_maps.h"
+#include "scanmesh/reconstruction/scan_surface.h"
+
+namespace scanmesh::cli {
+
+namespace {
+
+using Eigen::Vector2d;
+
+struct RegionsArgs {
+  std::string grid, lines, settings, png;
+};
+
+struct AnimeshArgs {
+  std::string grid, lines, settings, out;
+  std::optional<std::uint64_t> seed;
+  std::string strategy;
+};
+
+Rgb8 region_color(int r) {
+  static const Rgb8 palette[] = {{230, 25, 75},  {60, 180, 75},   {255, 225, 25}, {0, 130, 200},
+                                 {245, 130, 48}, {145, 30, 180},  {70, 240, 240}, {240, 50, 230},
+                                 {210, 245, 60}, {250, 190, 212}, {0, 128, 128},  {220, 190, 255},
+                                 {170, 110, 40}, {255, 250, 200}, {128, 0, 0},    {170, 255, 195},
+                                 {128, 128, 0},  {255, 215, 180}, {0, 0, 128},    {128, 128, 128}};
+  return palette[r % 20];
+}
+
+void plot(Image8& im, double x, double y, Rgb8 c) {
+  const int xi = static_cast<int>(std::floor(x)), yi = static_cast<int>(std::floor(y));
+  const int xw = ((xi % im.width) + im.width) % im.width;
+  if (yi < 0 || yi >= im.height) return;
+  im.set_rgb(xw, yi, c);
+}
+
+void draw_segment(Image8& im, Vector2d a, Vector2d b, Rgb8 c) {
+  const int steps = std::max(1, static_cast<int>(std::ceil((b - a).cwiseAbs().maxCoeff() * 2)));
+  for (int s = 0; s <= steps; ++s) {
+    const Vector2d p = a + (b - a) * (static_cast<double>(s) / steps);
+    plot(im, p.x(), p.y(), c);
+  }
+}
+
+Image8 texture_of(const RangeGrid& grid) { return texture_image(grid); }
+
+Image8 draw_regions(const RangeGrid& grid, const ScanSurface& surface, const aft::RegionGraph& g,
+                    const aft::LineSet& lines) {
+  Image8 im = texture_of(grid);
+  // Region fill: each pixel centre classified by the graph (openings hatched dark).
+  for (int y = 0; y < im.height; ++y)
+    for (int x = 0; x < im.width; ++x) {
+      const auto r = g.region_at(aft::pixel_to_param(surface, {x + 0.5, y + 0.5}));
+      if (!r) continue;
+      const Rgb8 c = g.regions[*r].opening ? Rgb8{20, 20, 20} : region_color(*r);
+      const Rgb8 t = im.rgb(x, y);
+      im.set_rgb(
+          x, y,
+          {static_cast<std::uint8_t>((t.r + c.r) / 2), static_cast<std::uint8_t>((t.g + c.g) / 2),
+           static_cast<std::uint8_t>((t.b + c.b) / 2)});
+    }
+  for (const auto& seg : g.segments) {
+    const auto kind = lines.lines[seg.line].kind;
+    const Rgb8 c = kind == aft::LineKind::Opening ? Rgb8{255, 255, 0}
+                   : kind == aft::LineKind::Seam  ? Rgb8{0, 255, 255}
+                                                  : Rgb8{255, 255, 255};
+    for (std::size_t k = 0; k + 1 < seg.pts.size(); ++k)
+      draw_segment(im, aft::param_to_pixel(surface, seg.pts[k]),
+                   aft::param_to_pixel(surface, seg.pts[k + 1]), c);
+  }
+  for (std::size_t r = 0; r < g.regions.size(); ++r) {
+    const Vector2d p = aft::param_to_pixel(surface, g.regions[r].label_point);
+    const int x = (static_cast<int>(p.x()) % im.width + im.width) % im.width;
+    draw_text(im, std::clamp(x - 4, 0, im.width - 12),
+              std::clamp(static_cast<int>(p.y()) - 3, 0, im.height - 8), std::to_string(r),
+              {0, 0, 0});
+  }
+  return im;
+}
+
+Image8 draw_mesh_2d(const RangeGrid& grid, const ScanSurface& surface,
+                    const aft::AnimationMesh& am) {
+  Image8 im = texture_of(grid);
+  auto px = [&](int v) { return aft::param_to_pixel(surface, am.params[v]); };
+  for (const auto& t : am.mesh.triangles)
+    for (int k = 0; k < 3; ++k) {
+      Vector2d a = px(t[k]), b = px(t[(k + 1) % 3]);
+      b.x() = a.x() + std::remainder(b.x() - a.x(), static_cast<double>(im.width));
+      draw_segment(im, a, b, {20, 20, 60});
+    }
+  for (const auto& e : am.line_edges) {
+    Vector2d a = px(e[0]), b = px(e[1]);
+    b.x() = a.x() + std::remainder(b.x() - a.x(), static_cast<double>(im.width));
+    draw_segment(im, a, b, {255, 40, 40});
+  }
+  return im;
+}
+
+struct Loaded {
+  RangeGrid grid;
+  std::unique_ptr<ScanSurface> surface;
+  aft::LineSet lines;
+  aft::RegionGraph graph;
+  aft::RegionSettings settings;
+};
+
+Loaded load(const std::string& grid_path, const std::string& lines_path,
+            const std::string& settings_path) {
+  Loaded l;
+  l.grid = read_grid(grid_path);
+  l.surface = std::make_unique<ScanSurface>(l.grid);
+  l.lines = aft::read_lines(lines_path);
+  aft::validate_lines(l.lines, *l.surface);
+  l.graph = aft::analyze_regions(l.lines, *l.surface);
+  if (!settings_path.empty()) l.settings = aft::read_region_settings(settings_path);
+  aft::apply_region_settings(l.graph, l.settings, *l.surface);
+  return l;
+}
+
+int run_regions(const RegionsArgs& a) {
+  const Loaded l = load(a.grid, a.lines, a.settings);
+  std::cout << l.graph.to_text();
+  if (!a.png.empty()) {
+    write_png(a.png, draw_regions(l.grid, *l.surface, l.graph, l.lines));
+    std::cout << "region layout: " << a.png << "\n";
+  }
+  return 0;
+}
+
+int run_animesh(const AnimeshArgs& a) {
+  Stopwatch total;
+  Loaded l = load(a.grid, a.lines, a.settings);
+  if (a.seed) l.settings.seed = *a.seed;
+  if (a.strategy == "random") l.settings.strategy = aft::EdgeStrategy::Random;
+  if (a.strategy == "shortest") l.settings.strategy = aft::EdgeStrategy::Shortest;
+  if (a.strategy == "longest") l.settings.strategy = aft::EdgeStrategy::Longest;
+  const double t_load = total.seconds();
+  Stopwatch mesh_time;
+  const aft::AnimationMesh am = aft::build_animation_mesh(l.graph, l.lines, *l.surface, l.settings);
+  const double t_mesh = mesh_time.seconds();
+  const aft::AnimationMeshQuality q = aft::evaluate_quality(am, *l.surface);
+  const MeshCheckReport check = check_mesh(am.mesh);
+  const std::filesystem::path out(a.out);
+  std::error_code ec;
+  std::filesystem::create_directories(out, ec);
+  if (ec) throw IoError("cannot create output directory '" + out.string() + "': " + ec.message());
+  write_ply(out / "mesh.ply", am.mesh);
+  write_obj(out / "mesh.obj", am.mesh);
+  write_png(out / "regions.png", draw_regions(l.grid, *l.surface, l.graph, l.lines));
+  write_png(out / "mesh2d.png", draw_mesh_2d(l.grid, *l.surface, am));
+  Mesh colored = am.mesh;
+  colored.colors.assign(colored.positions.size(), Rgb8{200, 200, 200});
+  for (std::size_t t = 0; t < colored.triangles.size(); ++t)
+    for (int v : colored.triangles[t]) colored.colors[v] = region_color(colored.face_labels[t]);
+  RenderOptions ro;
+  ro.draw_wireframe = true;
+  ro.use_vertex_colors = false;
+  write_png(out / "render.png", render_mesh(colored, ro));
+  write_quality_histogram_png(out / "min_angle_histogram.png", check);
+  int unmeshed = 0;
+  for (const auto& s : am.region_stats) unmeshed += s.unmeshed_front_edges;
+  nlohmann::json j;
+  j["vertices"] = am.mesh.positions.size();
+  j["triangles"] = am.mesh.triangles.size();
+  int steiner = 0;
+  for (auto s : am.steiner) steiner += s;
+  j["steiner_points"] = steiner;
+  j["flips"] = am.flips;
+  j["time_s"] = {{"load_and_regions", t_load}, {"mesh", t_mesh}};
+  j["quality"] = {{"min_angle_deg", q.min_angle_deg},
+                  {"min_angle_away_from_sharp_junctions_deg", q.min_angle_non_exempt_deg},
+                  {"exempt_triangles", q.small_angle_exempt},
+                  {"max_angle_deg", q.max_angle_deg},
+                  {"fraction_min_angle_ge_30", q.fraction_min_angle_ge_30},
+                  {"fraction_min_angle_ge_20", q.fraction_min_angle_ge_20},
+                  {"mean_q", q.mean_q},
+                  {"min_q", q.min_q},
+                  {"min_angle_histogram_5deg", q.min_angle_histogram},
+                  {"q_histogram_0.1", q.q_histogram},
+                  {"hausdorff_mesh_to_surface_mm", q.hausdorff_mesh_to_surface_mm},
+                  {"hausdorff_surface_to_mesh_mm", q.hausdorff_surface_to_mesh_mm},
+                  {"max_vertex_offset_mm", q.max_vertex_offset_mm}};
+  nlohmann::json val;
+  for (const auto& [v, n] : q.valence_histogram) val[std::to_string(v)] = n;
+  j["quality"]["valence_histogram"] = val;
+  nlohmann::json regions = nlohmann::json::array();
+  for (const auto& s : am.region_stats)
+    regions.push_back({{"region", s.region},
+                       {"name", l.graph.regions[s.region].name},
+                       {"unit_mm", l.graph.regions[s.region].unit_mm},
+                       {"triangles", s.triangles},
+                       {"steiner_points", s.steiner_points},
+                       {"chose_new", s.chose_new},
+                       {"chose_existing", s.chose_existing},
+                       {"chose_circumcentre", s.chose_circumcentre},
+                       {"unmeshed_front_edges", s.unmeshed_front_edges}});
+  j["regions"] = regions;
+  j["line_edges"] = am.line_edges;
+  j["seams"] = am.seams;
+  j["check"] = {{"edge_manifold", check.edge_manifold()},
+                {"duplicate_faces", check.duplicate_faces},
+                {"self_intersections", check.self_intersections},
+                {"boundary_loops", check.topology.boundary_loops}};
+  write_file_atomically(out / "animesh.json", j.dump(2) + "\n");
+  std::cout << l.graph.to_text() << am.mesh.positions.size() << " vertices (" << steiner
+            << " Steiner points), " << am.mesh.triangles.size() << " triangles, meshed in "
+            << t_mesh << " s\n"
+            << q.to_text() << "outputs in " << out.string()
+            << "/: mesh.ply mesh.obj animesh.json regions.png mesh2d.png render.png "
+               "min_angle_histogram.png\n";
+  if (unmeshed > 0) {
+    std::cerr << "scanmesh animesh: " << unmeshed
+              << " front edges could not be closed; the mesh has gaps (see animesh.json)\n";
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace
+
+void register_aft_commands(CLI::App& app, CommandList& commands) {
+  auto ra = std::make_shared<RegionsArgs>();
+  CLI::App* r = app.add_subcommand("regions", "Region analysis of animation lines over a scan");
+  r->add_option("grid", ra->grid, "Range grid (.smg)")->required()->check(CLI::ExistingFile);
+  r->add_option("--lines", ra->lines, "Animation lines (.svg or .json)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  r->add_option("--settings", ra->settings, "Region settings (.yaml/.json)")
+      ->check(CLI::ExistingFile);
+  r->add_option("--png", ra->png, "Draw the regions over the texture into this PNG");
+  commands.push_back({r, [ra] { return run_regions(*ra); }});
+
+  auto aa = std::make_shared<AnimeshArgs>();
+  CLI::App* m = app.add_subcommand("animesh", "Animation mesh: regions meshed by advancing fronts");
+  m->add_option("grid", aa->grid, "Range grid (.smg)")->required()->check(CLI::ExistingFile);
+  m->add_option("--lines", aa->lines, "Animation lines (.svg or .json)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  m->add_option("--settings", aa->settings, "Region settings (.yaml/.json)")
+      ->check(CLI::ExistingFile);
+  m->add_option("--out", aa->out, "Output directory")->required();
+  m->add_option("--seed", aa->seed, "Seed of the random edge order");
+  m->add_option("--strategy", aa->strategy, "Front edge order: random | shortest | longest")
+      ->check(CLI::IsMember({"random", "shortest", "longest"}));
+  commands.push_back({m, [aa] { return run_animesh(*aa); }});
+}
+
+}  // namespace scanmesh::cli

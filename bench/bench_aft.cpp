@@ -1,0 +1,187 @@
+// Seed 000 animation meshes against CGAL: the advancing-front mesh of the sample head
+// (configs/sim/head-lines.svg + head-regions.yaml) and CGAL::Polygon_mesh_processing::
+// isotropic_remeshing of the grid mesh of the same scan band, with the grid edges along the
+// animation lines constrained, at the AFT mesh's mean edge length. Same scan, same run.
+// Also: AFT triangles per second at a fine unit size. Plain table on stdout.
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/remesh.h>
+#include <CGAL/Surface_mesh.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <vector>
+
+#include "scanmesh/meshing/aft/animesh.h"
+#include "scanmesh/meshing/grid_mesh.h"
+#include "scanmesh/sim/range_scanner.h"
+#include "scanmesh/sim/scene.h"
+
+using namespace scanmesh;
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using SM = CGAL::Surface_mesh<K::Point_3>;
+namespace PMP = CGAL::Polygon_mesh_processing;
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+struct Row {
+  const char* name;
+  double time_s;
+  std::size_t vertices, triangles;
+  aft::AnimationMeshQuality q;
+};
+
+void print(const Row& r) {
+  std::printf("%-34s %8.3f %9zu %9zu %8.2f %8.2f %7.3f %9.3f %9.3f\n", r.name, r.time_s, r.vertices,
+              r.triangles, r.q.min_angle_deg, 100 * (1 - r.q.fraction_min_angle_ge_30), r.q.mean_q,
+              r.q.hausdorff_mesh_to_surface_mm, r.q.hausdorff_surface_to_mesh_mm);
+}
+
+double mean_edge(const Mesh& m) {
+  double s = 0;
+  std::size_t n = 0;
+  for (const auto& t : m.triangles)
+    for (int k = 0; k < 3; ++k) {
+      s += (m.positions[t[k]] - m.positions[t[(k + 1) % 3]]).norm();
+      ++n;
+    }
+  return n ? s / n : 0;
+}
+
+}  // namespace
+
+int main() {
+  const std::string src = SCANMESH_SOURCE_DIR;
+  const auto config =
+      sim::ScannerConfig::from_yaml_file(src + "/configs/sim/head-scanner-ideal.yaml");
+  const sim::SimulatedScan scan = sim::simulate_scan(sim::builtin_head_scene(), config);
+  const RangeGrid& grid = scan.grid;
+  const ScanSurface surface(grid);
+  const aft::LineSet lines = aft::read_lines(src + "/configs/sim/head-lines.svg");
+  aft::RegionGraph g = aft::analyze_regions(lines, surface);
+  const aft::RegionSettings settings =
+      aft::read_region_settings(src + "/configs/sim/head-regions.yaml");
+  aft::apply_region_settings(g, settings, surface);
+
+  std::printf("%-34s %8s %9s %9s %8s %8s %7s %9s %9s\n", "method", "time_s", "vertices",
+              "triangles", "min_ang", "%<30deg", "mean_q", "H_m->s", "H_s->m");
+  // 1. AFT, sample head (best of 3 runs for the time).
+  double best = 1e300;
+  aft::AnimationMesh am;
+  for (int run = 0; run < 3; ++run) {
+    const auto t0 = std::chrono::steady_clock::now();
+    am = aft::build_animation_mesh(g, lines, surface, settings);
+    best = std::min(best, seconds_since(t0));
+  }
+  const Row aft_row{"AFT (seed 000), sample head", best, am.mesh.positions.size(),
+                    am.mesh.triangles.size(), aft::evaluate_quality(am, surface, 4)};
+  print(aft_row);
+  const double target = mean_edge(am.mesh);
+
+  // 2. CGAL isotropic remeshing of the grid mesh of the band between neck and crown lines,
+  // grid edges within half a cell of an animation line constrained.
+  GridMeshOptions gopt;
+  gopt.with_texcoords = false;
+  const GridMesh gm = grid_mesh(grid, gopt);
+  const double row_lo = 30, row_hi = 440;
+  SM sm;
+  std::vector<SM::Vertex_index> vmap(gm.mesh.positions.size());
+  std::vector<char> keep(gm.mesh.positions.size(), 0);
+  for (std::size_t v = 0; v < gm.mesh.positions.size(); ++v) {
+    const double row = static_cast<double>(gm.vertex_cell[v] / grid.n_phi());
+    keep[v] = row >= row_lo && row <= row_hi;
+  }
+  std::map<int, int> used;
+  for (const auto& t : gm.mesh.triangles)
+    if (keep[t[0]] && keep[t[1]] && keep[t[2]])
+      for (int v : t)
+        if (!used.count(v)) {
+          const auto& p = gm.mesh.positions[v];
+          used[v] = 1;
+          vmap[v] = sm.add_vertex(K::Point_3(p.x(), p.y(), p.z()));
+        }
+  for (const auto& t : gm.mesh.triangles)
+    if (keep[t[0]] && keep[t[1]] && keep[t[2]]) sm.add_face(vmap[t[0]], vmap[t[1]], vmap[t[2]]);
+  // Constrain grid edges lying along the lines: both ends within 0.75 px of a line (pixels).
+  std::vector<Eigen::Vector2d> line_px;
+  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> pieces;
+  for (const auto& s : g.segments)
+    for (std::size_t k = 0; k + 1 < s.pts.size(); ++k)
+      pieces.push_back(
+          {aft::param_to_pixel(surface, s.pts[k]), aft::param_to_pixel(surface, s.pts[k + 1])});
+  auto near_line = [&](std::size_t cell) {
+    const Eigen::Vector2d p(static_cast<double>(cell % grid.n_phi()) + 0.5,
+                            static_cast<double>(cell / grid.n_phi()) + 0.5);
+    for (const auto& [a, b] : pieces) {
+      for (int k = -1; k <= 1; ++k) {
+        Eigen::Vector2d q = p + Eigen::Vector2d(k * grid.n_phi(), 0);
+        const Eigen::Vector2d d = b - a;
+        const double t =
+            d.squaredNorm() > 0 ? std::clamp((q - a).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
+        if ((a + t * d - q).norm() < 0.75) return true;
+      }
+    }
+    return false;
+  };
+  std::vector<char> on_line(gm.mesh.positions.size(), 0);
+  for (const auto& [v, _] : used) on_line[v] = near_line(gm.vertex_cell[v]);
+  auto ecm = sm.add_property_map<SM::Edge_index, bool>("e:constrained", false).first;
+  std::map<SM::Vertex_index, int> back;
+  for (const auto& [v, _] : used) back[vmap[v]] = v;
+  std::size_t constrained = 0;
+  for (auto e : sm.edges()) {
+    const int a = back[sm.vertex(e, 0)], b = back[sm.vertex(e, 1)];
+    if (on_line[a] && on_line[b]) {
+      ecm[e] = true;
+      ++constrained;
+    }
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  PMP::isotropic_remeshing(
+      faces(sm), target, sm,
+      CGAL::parameters::number_of_iterations(3).edge_is_constrained_map(ecm).protect_constraints(
+          false));
+  const double t_cgal = seconds_since(t0);
+  sm.collect_garbage();
+  aft::AnimationMesh cg;
+  std::map<SM::Vertex_index, int> idx;
+  for (auto v : sm.vertices()) {
+    const auto& p = sm.point(v);
+    idx[v] = static_cast<int>(cg.mesh.positions.size());
+    cg.mesh.positions.emplace_back(p.x(), p.y(), p.z());
+    cg.params.emplace_back(std::atan2(p.y(), p.x()), p.z());
+  }
+  for (auto f : sm.faces()) {
+    std::array<int, 3> t{};
+    int k = 0;
+    for (auto v : vertices_around_face(sm.halfedge(f), sm)) t[k++] = idx[v];
+    cg.mesh.triangles.push_back(t);
+    cg.mesh.face_labels.push_back(0);
+  }
+  const Row cgal_row{"CGAL isotropic_remeshing (grid)", t_cgal, cg.mesh.positions.size(),
+                     cg.mesh.triangles.size(), aft::evaluate_quality(cg, surface, 4)};
+  print(cgal_row);
+  std::printf("  target edge %.2f mm (AFT mean), %zu constrained grid edges along the lines\n",
+              target, constrained);
+  std::printf("  ratios CGAL/AFT: time %.2f, vertices %.2f, mean q %.3f\n", t_cgal / aft_row.time_s,
+              double(cgal_row.vertices) / aft_row.vertices, cgal_row.q.mean_q / aft_row.q.mean_q);
+
+  // 3. AFT speed at a fine unit size (all units / 4).
+  aft::RegionSettings fine = settings;
+  fine.default_unit_mm /= 4;
+  for (auto& r : fine.regions)
+    if (r.unit_mm) *r.unit_mm /= 4;
+  aft::RegionGraph gf = aft::analyze_regions(lines, surface);
+  aft::apply_region_settings(gf, fine, surface);
+  const auto t1 = std::chrono::steady_clock::now();
+  const aft::AnimationMesh amf = aft::build_animation_mesh(gf, lines, surface, fine);
+  const double tf = seconds_since(t1);
+  std::printf("AFT fine (units / 4): %zu triangles in %.3f s = %.0f triangles/s\n",
+              amf.mesh.triangles.size(), tf, amf.mesh.triangles.size() / tf);
+  return 0;
+}

@@ -1,0 +1,110 @@
+// Region analysis (seed 000 §5.1 and §7.1 item 1): exact intersections of the animation lines
+// in (phi, h) with phi wrapping round, segments between intersections and end points, the
+// planar graph on the cylinder, its faces (regions), holes (components inside a region) and
+// dangling internal constraint lines. Region settings (unit size, mesher) per region.
+#pragma once
+
+#include <Eigen/Core>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "scanmesh/meshing/aft/animation_lines.h"
+#include "scanmesh/reconstruction/scan_surface.h"
+
+namespace scanmesh::aft {
+
+//! Part of one animation line between two junctions (intersections or end points).
+struct Segment {
+  int line = -1;                     //!< index into LineSet::lines
+  int node0 = -1, node1 = -1;        //!< graph nodes at the ends (equal for a lone loop)
+  std::vector<Eigen::Vector2d> pts;  //!< (phi, h), phi unwrapped (continuous along the segment)
+  int left_region = -1, right_region = -1;  //!< meshed region on each side, -1 none
+};
+
+//! One segment traversed in a direction.
+struct HalfEdgeRef {
+  int segment = -1;
+  bool forward = true;
+};
+
+//! A closed walk along segments with the face on its left: an outer boundary (counter-
+//! clockwise in (phi, h), area > 0), or the outside of a component (area <= 0). A dangling line
+//! appears in it twice, once in each direction.
+struct BoundaryCycle {
+  std::vector<HalfEdgeRef> edges;
+  double area = 0;  //!< signed, rad * mm
+  int winding = 0;  //!< turns round the axis (non-zero: a cap towards the grid's top/bottom)
+  int component = -1;
+};
+
+struct Region {
+  int outer = -1;               //!< index into RegionGraph::cycles
+  std::vector<int> inner;       //!< holes and free-standing internal lines inside it
+  bool opening = false;         //!< bounded only by opening lines: left empty
+  double area = 0;              //!< outer area minus the holes' (rad * mm)
+  Eigen::Vector2d label_point;  //!< a (phi, h) point inside, for labels
+  std::string name;             //!< from the settings, or "region-N"
+  double unit_mm = 0;           //!< standard edge length (settings)
+  std::string mesher = "aft";   //!< aft | delaunay
+};
+
+struct RegionGraph {
+  std::vector<Eigen::Vector2d> nodes;  //!< (phi, h), phi in [phi0, phi0 + 2 pi)
+  std::vector<Segment> segments;
+  std::vector<BoundaryCycle> cycles;
+  std::vector<Region> regions;     //!< includes openings (opening = true)
+  std::vector<int> dangling_ends;  //!< nodes where a line ends without meeting another
+
+  //! The region containing (phi, h), or nullopt (outside all regions).
+  std::optional<int> region_at(const Eigen::Vector2d& param) const;
+  //! Polygon of a cycle in (phi, h), phi unwrapped along it.
+  std::vector<Eigen::Vector2d> cycle_polygon(int cycle) const;
+  //! Human-readable summary.
+  std::string to_text() const;
+};
+
+//! Builds the graph. End points within `snap_px` texture pixels of another line are moved onto
+//! it (a T junction); end points within snap_px of each other are joined. Throws
+//! FileFormatError naming the file and line for a self-intersecting line or lines that overlap.
+RegionGraph analyze_regions(const LineSet& lines, const ScanSurface& surface, double snap_px = 1.5);
+
+// ---------------------------------------------------------------------------------------------
+
+struct RegionRule {
+  std::string name;
+  std::optional<Eigen::Vector2d> point_px;  //!< texture pixel inside the region
+  std::optional<double> unit_mm;
+  std::optional<std::string> mesher;
+};
+
+enum class EdgeStrategy { Random, Shortest, Longest };
+enum class SegmentInit { Equidistant, Curvature };
+
+struct RegionSettings {
+  double default_unit_mm = 6.0;
+  std::string default_mesher = "aft";
+  EdgeStrategy strategy = EdgeStrategy::Shortest;
+  SegmentInit segment_init = SegmentInit::Equidistant;
+  double curvature_weight_mm = 10.0;   //!< curvature init: measure = arc + weight * turning
+  double chordal_tolerance_mm = 0.5;  //!< curvature-adaptive size: sagitta bound
+  double min_unit_mm = 0.3;            //!< lower bound of the adaptive size
+  int relax_iterations = 30;           //!< segment nodes "on rails"
+  int smooth_iterations = 3;           //!< tangential smoothing of Steiner points
+  std::uint64_t seed = 1;
+  std::vector<RegionRule> regions;
+};
+
+//! YAML (or JSON, a subset of YAML) region settings (docs/formats.md, "Region settings").
+//! Throws FileFormatError naming the file for unknown keys, wrong types or impossible values.
+RegionSettings parse_region_settings(std::string_view text, const std::string& file);
+RegionSettings read_region_settings(const std::filesystem::path& path);
+
+//! Applies the settings' rules to the graph's regions (names, unit sizes, meshers). A rule whose
+//! point lies in no region throws InvalidInputError naming the rule.
+void apply_region_settings(RegionGraph& graph, const RegionSettings& settings,
+                           const ScanSurface& surface);
+
+}  // namespace scanmesh::aft

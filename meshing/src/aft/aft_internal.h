@@ -1,0 +1,46 @@
+// Internal interfaces of the animation-mesh stage (not installed).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "scanmesh/meshing/aft/animesh.h"
+#include "scanmesh/reconstruction/scan_surface.h"
+
+namespace scanmesh::aft::detail {
+
+//! Every node of the animation mesh: (phi, h) and its point and normal on the surface.
+struct NodeStore {
+  std::vector<Eigen::Vector2d> params;
+  std::vector<Eigen::Vector3d> pos, normal;
+  //! Lifts (phi, h) onto the surface; -1 if the surface is undefined there.
+  int add(const Eigen::Vector2d& param, const ScanSurface& surface);
+  //! Moves node i to (phi, h); false (node unchanged) if the surface is undefined there.
+  bool move(int i, const Eigen::Vector2d& param, const ScanSurface& surface);
+};
+
+//! (phi, h) of a 3D point near the surface: the cylindrical angle unwrapped next to `near_phi`.
+Eigen::Vector2d param_of(const Eigen::Vector3d& x, double near_phi);
+
+struct RegionMeshInput {
+  std::vector<std::array<int, 2>> front;  //!< directed boundary edges, region on the left
+  double unit_mm = 6;
+  EdgeStrategy strategy = EdgeStrategy::Shortest;
+  double chordal_tolerance_mm = 0.15;
+  double min_unit_mm = 0.3;
+  std::uint64_t seed = 1;
+  std::size_t max_steps = 0;  //!< 0: derived from the front size
+  //! The region in (phi, h): outer boundary and holes (even-odd); every new node and triangle
+  //! centroid must lie inside (a safety net behind the front tests).
+  std::vector<std::vector<Eigen::Vector2d>> polygons;
+};
+
+//! The advancing-front mesher of one region; triangles counter-clockwise seen from outside.
+std::vector<std::array<int, 3>> aft_mesh_region(NodeStore& nodes, const ScanSurface& surface,
+                                                const RegionMeshInput& input,
+                                                RegionMeshStats& stats);
+
+}  // namespace scanmesh::aft::detail

@@ -1,0 +1,657 @@
+// The advancing-front region mesher on the 3D scan surface (seed 000 §4.3.4, §5.1.1, §7.1).
+//
+// The front is a set of directed edges with the unmeshed region on their left; components,
+// splits and merges are implicit: adding triangle (a, b, c) on front edge a->b removes a->b and,
+// for each new side, either cancels its reverse (UPDATE-BOUNDARY cases a, b, d, and merges with
+// other components) or adds it (case c splits a component). Every geometric test is made in the
+// tangent frame at the front edge's midpoint; the new candidate R is constructed in 3D by
+// rotating the ideal apex about the edge until it meets the surface.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <queue>
+#include <set>
+#include <unordered_map>
+
+#include "aft_internal.h"
+#include "scanmesh/core/errors.h"
+
+namespace scanmesh::aft::detail {
+
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+
+int NodeStore::add(const Vector2d& param, const ScanSurface& surface) {
+  const auto jet = surface.evaluate(param.x(), param.y());
+  if (!jet) return -1;
+  params.push_back(param);
+  pos.push_back(jet->position);
+  normal.push_back(jet->normal());
+  return static_cast<int>(params.size()) - 1;
+}
+
+bool NodeStore::move(int i, const Vector2d& param, const ScanSurface& surface) {
+  const auto jet = surface.evaluate(param.x(), param.y());
+  if (!jet) return false;
+  params[i] = param;
+  pos[i] = jet->position;
+  normal[i] = jet->normal();
+  return true;
+}
+
+Vector2d param_of(const Vector3d& x, double near_phi) {
+  double phi = std::atan2(x.y(), x.x());
+  phi += 2 * M_PI * std::round((near_phi - phi) / (2 * M_PI));
+  return {phi, x.z()};
+}
+
+namespace {
+
+std::uint64_t edge_key(int a, int b) {
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) |
+         static_cast<std::uint32_t>(b);
+}
+
+double cross2(const Vector2d& a, const Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
+
+// Proper crossing of segments p1-p2 and q1-q2 (touching at an end point does not count).
+bool segments_cross(const Vector2d& p1, const Vector2d& p2, const Vector2d& q1, const Vector2d& q2,
+                    double eps) {
+  const double d1 = cross2(p2 - p1, q1 - p1), d2 = cross2(p2 - p1, q2 - p1);
+  const double d3 = cross2(q2 - q1, p1 - q1), d4 = cross2(q2 - q1, p2 - q1);
+  return ((d1 > eps && d2 < -eps) || (d1 < -eps && d2 > eps)) &&
+         ((d3 > eps && d4 < -eps) || (d3 < -eps && d4 > eps));
+}
+
+double point_segment_distance(const Vector3d& p, const Vector3d& a, const Vector3d& b) {
+  const Vector3d ab = b - a;
+  const double t =
+      ab.squaredNorm() > 0 ? std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
+  return (a + t * ab - p).norm();
+}
+
+double min_angle(const Vector3d& a, const Vector3d& b, const Vector3d& c) {
+  auto ang = [](const Vector3d& p, const Vector3d& q, const Vector3d& r) {
+    const Vector3d u = q - p, v = r - p;
+    return std::atan2(u.cross(v).norm(), u.dot(v));
+  };
+  return std::min({ang(a, b, c), ang(b, c, a), ang(c, a, b)});
+}
+
+bool inside_polygons(const std::vector<std::vector<Vector2d>>& polys, const Vector2d& p0) {
+  bool inside = false;
+  for (const auto& poly : polys) {
+    if (poly.size() < 3) continue;
+    double xmin = 1e300, xmax = -1e300;
+    for (const Vector2d& v : poly) {
+      xmin = std::min(xmin, v.x());
+      xmax = std::max(xmax, v.x());
+    }
+    Vector2d q = p0;
+    q.x() -= 2 * M_PI * std::floor((q.x() - xmin) / (2 * M_PI));
+    for (; q.x() <= xmax; q.x() += 2 * M_PI) {
+      bool in = false;
+      for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
+        const Vector2d& a = poly[i];
+        const Vector2d& b = poly[j];
+        if ((a.y() > q.y()) != (b.y() > q.y())) {
+          const double x = a.x() + (q.y() - a.y()) / (b.y() - a.y()) * (b.x() - a.x());
+          if (q.x() < x) in = !in;
+        }
+      }
+      if (in) inside = !inside;
+    }
+  }
+  return inside;
+}
+
+class Mesher {
+ public:
+  Mesher(NodeStore& nodes, const ScanSurface& surface, const RegionMeshInput& in,
+         RegionMeshStats& stats)
+      : N_(nodes), S_(surface), in_(in), stats_(stats), rng_(in.seed * 0x9E3779B97F4A7C15ull + 1) {}
+
+  std::vector<std::array<int, 3>> run() {
+    double longest = in_.unit_mm;
+    for (const auto& e : in_.front)
+      longest = std::max(longest, (N_.pos[e[1]] - N_.pos[e[0]]).norm());
+    cell_ = std::max(1e-3, 2.5 * longest);
+    for (const auto& e : in_.front) add_edge(e[0], e[1]);
+    std::vector<int> deferred;
+    bool relaxed = false;
+    std::size_t guard = 0;
+    const std::size_t guard_max = in_.max_steps > 0 ? in_.max_steps : 20000 + 40 * in_.front.size();
+    while (true) {
+      if (++guard >= guard_max) {
+        stats_.unmeshed_front_edges = static_cast<int>(index_.size());
+        break;
+      }
+      int e = next_edge();
+      if (e < 0) {
+        // Retry the edges that failed while anything still changes; then once relaxed.
+        std::vector<int> live;
+        for (int d : deferred)
+          if (edges_[d].alive) live.push_back(d);
+        deferred.clear();
+        if (live.empty()) break;
+        if (!progress_) {
+          if (relaxed) {
+            stats_.unmeshed_front_edges = static_cast<int>(live.size());
+            if (std::getenv("SCANMESH_AFT_DEBUG"))
+              for (int d : live)
+                std::fprintf(stderr, "left: %d->%d (%.5f %.4f)->(%.5f %.4f) n.n %g\n", edges_[d].a,
+                             edges_[d].b, N_.params[edges_[d].a].x(), N_.params[edges_[d].a].y(),
+                             N_.params[edges_[d].b].x(), N_.params[edges_[d].b].y(),
+                             N_.normal[edges_[d].a].dot(N_.normal[edges_[d].b]));
+            break;
+          }
+          relaxed = true;
+        }
+        progress_ = false;
+        for (int d : live) push(d);
+        continue;
+      }
+      if (!edges_[e].alive) continue;
+      if (std::getenv("SCANMESH_AFT_DEBUG") && guard % 2000 == 0)
+        std::fprintf(stderr, "aft: iter %zu triangles %zu nodes %zu alive %zu\n", guard,
+                     triangles_.size(), N_.pos.size(), index_.size());
+      if (try_edge(e, relaxed)) {
+        progress_ = true;
+        relaxed = false;
+      } else {
+        deferred.push_back(e);
+      }
+    }
+    return triangles_;
+  }
+
+ private:
+  struct FEdge {
+    int a, b;
+    bool alive;
+    double length;
+  };
+
+  std::uint64_t rand64() {
+    rng_ ^= rng_ >> 12;
+    rng_ ^= rng_ << 25;
+    rng_ ^= rng_ >> 27;
+    return rng_ * 0x2545F4914F6CDD1Dull;
+  }
+
+  void add_edge(int a, int b) {
+    const int id = static_cast<int>(edges_.size());
+    edges_.push_back({a, b, true, (N_.pos[b] - N_.pos[a]).norm()});
+    index_[edge_key(a, b)] = id;
+    alive_.push_back(id);
+    bucket(id);
+    push(id);
+  }
+  void kill(int id) {
+    edges_[id].alive = false;
+    index_.erase(edge_key(edges_[id].a, edges_[id].b));
+  }
+  int find(int a, int b) const {
+    const auto it = index_.find(edge_key(a, b));
+    return it == index_.end() ? -1 : it->second;
+  }
+  void push(int id) {
+    if (in_.strategy == EdgeStrategy::Random) {
+      pool_.push_back(id);
+    } else {
+      const double key =
+          in_.strategy == EdgeStrategy::Shortest ? -edges_[id].length : edges_[id].length;
+      heap_.push({key, -id});
+    }
+  }
+  int next_edge() {
+    if (in_.strategy == EdgeStrategy::Random) {
+      while (!pool_.empty()) {
+        const std::size_t k = rand64() % pool_.size();
+        const int id = pool_[k];
+        pool_[k] = pool_.back();
+        pool_.pop_back();
+        if (edges_[id].alive) return id;
+      }
+      return -1;
+    }
+    while (!heap_.empty()) {
+      const int id = -heap_.top().second;
+      heap_.pop();
+      if (edges_[id].alive) return id;
+    }
+    return -1;
+  }
+
+  double size_at(const Vector2d& param) const {
+    double u = in_.unit_mm;
+    if (in_.chordal_tolerance_mm > 0) {
+      if (const auto jet = S_.evaluate(param.x(), param.y())) {
+        const SurfaceCurvature c = jet->curvature();
+        const double k = std::max(std::fabs(c.k1), std::fabs(c.k2));
+        if (k > 1e-12) u = std::min(u, std::sqrt(8.0 * in_.chordal_tolerance_mm / k));
+      }
+    }
+    return std::max(u, std::max(in_.min_unit_mm, 0.6 * in_.unit_mm));
+  }
+
+  // Local tangent frame of the current edge.
+  struct Frame {
+    Vector3d M, n, t1, t2;
+    Vector2d operator()(const Vector3d& p) const { return {(p - M).dot(t1), (p - M).dot(t2)}; }
+  };
+
+  struct Near {
+    std::vector<int> nodes;  // front nodes near the edge (normals agreeing)
+    std::vector<int> edges;  // alive front edges near the edge
+  };
+
+  // Front edges bucketed by the cell of their midpoint (lazy deletion), so the search near an
+  // edge costs O(local front) instead of O(front).
+  std::int64_t cell_key(const Vector3d& x) const {
+    const auto c = [&](double v) {
+      return static_cast<std::int64_t>(std::floor(v / cell_)) & 0x1fffff;
+    };
+    return (c(x.x()) << 42) | (c(x.y()) << 21) | c(x.z());
+  }
+  void bucket(int id) {
+    const FEdge& e = edges_[id];
+    max_len_ = std::max(max_len_, e.length);
+    grid_[cell_key(0.5 * (N_.pos[e.a] + N_.pos[e.b]))].push_back(id);
+  }
+
+  Near gather(int self, const Frame& f, double radius) {
+    Near nr;
+    const double r2 = radius * radius;
+    const double reach = radius + 0.5 * max_len_;
+    const int n = static_cast<int>(std::ceil(reach / cell_));
+    for (int dx = -n; dx <= n; ++dx)
+      for (int dy = -n; dy <= n; ++dy)
+        for (int dz = -n; dz <= n; ++dz) {
+          const auto it = grid_.find(cell_key(f.M + cell_ * Vector3d(dx, dy, dz)));
+          if (it == grid_.end()) continue;
+          auto& list = it->second;
+          std::size_t keep = 0;
+          for (std::size_t k = 0; k < list.size(); ++k) {
+            const int id = list[k];
+            if (!edges_[id].alive) continue;
+            list[keep++] = id;
+            if (id == self) continue;
+            const FEdge& e = edges_[id];
+            const Vector3d& p = N_.pos[e.a];
+            const Vector3d& q = N_.pos[e.b];
+            const double lim = radius + e.length;
+            if ((p - f.M).squaredNorm() > lim * lim && (q - f.M).squaredNorm() > lim * lim)
+              continue;
+            nr.edges.push_back(id);
+            for (int v : {e.a, e.b})
+              if ((N_.pos[v] - f.M).squaredNorm() < r2) nr.nodes.push_back(v);
+          }
+          list.resize(keep);
+        }
+    std::sort(nr.edges.begin(), nr.edges.end());
+    std::sort(nr.nodes.begin(), nr.nodes.end());
+    nr.nodes.erase(std::unique(nr.nodes.begin(), nr.nodes.end()), nr.nodes.end());
+    return nr;
+  }
+
+  // Triangle a, b, c (c left of a->b) is free: no front edge crosses it or enters a corner,
+  // no front node inside, the sides are not already front edges, and it faces outwards.
+  // The topological tests run in the (phi, h) parameter plane, scaled to millimetres at the
+  // edge (x = rho * phi): the surface is a graph over it, so the front is a planar straight-line
+  // graph there and the tests cannot be fooled by a tangent plane that folds over on strongly
+  // curved parts. Shape decisions (candidates, circumcentres) stay in 3D / the tangent frame.
+  struct ParamFrame {
+    Vector2d origin;
+    double rho;
+    Vector2d operator()(const Vector2d& p) const {
+      return {rho * std::remainder(p.x() - origin.x(), 2 * M_PI), p.y() - origin.y()};
+    }
+  };
+
+  bool visible(int a, int b, int c, const Vector3d& cpos, const Vector2d& cparam, const Frame& f,
+               const Near& nr) {
+    ParamFrame pf;
+    pf.origin = N_.params[a];
+    pf.rho = std::max(1e-6, std::hypot(f.M.x(), f.M.y()));
+    auto P2 = [&](int v) { return pf(N_.params[v]); };
+    const Vector2d A = P2(a), B = P2(b), C = pf(cparam);
+    const double scale = (B - A).norm();
+    const double eps = 1e-9 * scale * scale;
+    if (cross2(B - A, C - A) <= eps) return false;
+    if (!in_.polygons.empty()) {
+      const Vector2d cen(pf.origin.x() + (A.x() + B.x() + C.x()) / (3 * pf.rho),
+                         pf.origin.y() + (A.y() + B.y() + C.y()) / 3);
+      if (!inside_polygons(in_.polygons, cen)) return false;
+      if (c < 0 && !inside_polygons(in_.polygons, cparam)) return false;
+    }
+    const Vector3d nt = (N_.pos[b] - N_.pos[a]).cross(cpos - N_.pos[a]);
+    if (!relaxed_ && nt.dot(f.n) <= 0) return false;
+    if (c >= 0 && (find(a, c) >= 0 || find(c, b) >= 0)) return false;
+    for (int id : nr.edges) {
+      const FEdge& e = edges_[id];
+      const Vector2d P = P2(e.a), Q = P2(e.b);
+      const bool ta = e.a == a || e.a == b || e.a == c, tb = e.b == a || e.b == b || e.b == c;
+      if (ta && tb) continue;  // a side of the triangle
+      if (!ta && !tb) {
+        if (segments_cross(A, C, P, Q, eps) || segments_cross(B, C, P, Q, eps)) return false;
+        continue;
+      }
+      // One end at a corner: must not point into the triangle there, nor cross the far side.
+      const int v = ta ? e.a : e.b;
+      const Vector2d V = ta ? P : Q, W = ta ? Q : P;
+      const Vector2d d = W - V;
+      Vector2d from, to;
+      if (v == a) {
+        from = B - A;
+        to = C - A;
+      } else if (v == b) {
+        from = C - B;
+        to = A - B;
+      } else {
+        from = A - C;
+        to = B - C;
+      }
+      if (cross2(from, d) > eps && cross2(d, to) > eps) return false;
+      if (v != c && segments_cross(v == a ? B : A, C, V, W, eps)) return false;
+      if (v == c && segments_cross(A, B, V, W, eps)) return false;
+    }
+    for (int v : nr.nodes) {
+      if (v == a || v == b || v == c) continue;
+      const Vector2d P = P2(v);
+      // Inside or on a side: a node on a new side (e.g. the middle one of three collinear
+      // boundary nodes) would be skipped by the new edge and leave a zero-area front loop.
+      const double tol = 1e-7 * scale * scale;
+      if (cross2(B - A, P - A) > -tol && cross2(C - B, P - B) > -tol && cross2(A - C, P - C) > -tol)
+        return false;
+    }
+    return true;
+  }
+
+  bool clear_of_front(const Vector3d& x, double u, int self, const Near& nr) const {
+    for (int v : nr.nodes)
+      if ((N_.pos[v] - x).norm() < 0.55 * u) return false;
+    for (int id : nr.edges) {
+      if (id == self) continue;
+      if (point_segment_distance(x, N_.pos[edges_[id].a], N_.pos[edges_[id].b]) < 0.3 * u)
+        return false;
+    }
+    return true;
+  }
+
+  void add_triangle(int e, int c) {
+    const int a = edges_[e].a, b = edges_[e].b;
+    if (const char* box = std::getenv("SCANMESH_AFT_BOX")) {
+      double x0, x1, y0, y1;
+      if (std::sscanf(box, "%lf,%lf,%lf,%lf", &x0, &x1, &y0, &y1) == 4) {
+        Vector2d cp = N_.params[c];
+        cp.x() = x0 + std::fmod(std::fmod(cp.x() - x0, 2 * M_PI) + 2 * M_PI, 2 * M_PI);
+        if (cp.x() < x0 || cp.x() > x1 || cp.y() < y0 || cp.y() > y1) {
+          std::fprintf(stderr,
+                       "outside: tri %d %d %d choice %d tri#%zu a=(%g,%g) b=(%g,%g) c=(%g,%g)\n", a,
+                       b, c, last_choice_, triangles_.size(), N_.params[a].x(), N_.params[a].y(),
+                       N_.params[b].x(), N_.params[b].y(), N_.params[c].x(), N_.params[c].y());
+          const Frame f = frame_of(a, b);
+          std::fprintf(stderr, "  local a (%g %g) b (%g %g) c (%g %g) n.na %g n.nb %g\n",
+                       f(N_.pos[a]).x(), f(N_.pos[a]).y(), f(N_.pos[b]).x(), f(N_.pos[b]).y(),
+                       f(N_.pos[c]).x(), f(N_.pos[c]).y(), f.n.dot(N_.normal[a]),
+                       f.n.dot(N_.normal[b]));
+          for (int id : alive_)
+            if (edges_[id].alive) {
+              const auto& E = edges_[id];
+              if ((N_.pos[E.a] - f.M).norm() < 12)
+                std::fprintf(stderr, "   front %d->%d (%g %g)->(%g %g) param (%g %g)\n", E.a, E.b,
+                             f(N_.pos[E.a]).x(), f(N_.pos[E.a]).y(), f(N_.pos[E.b]).x(),
+                             f(N_.pos[E.b]).y(), N_.params[E.a].x(), N_.params[E.a].y());
+            }
+          std::abort();
+        }
+      }
+    }
+    if (std::getenv("SCANMESH_AFT_OVERLAP")) check_overlap(a, b, c);
+    triangles_.push_back({a, b, c});
+    kill(e);
+    if (const int r = find(c, a); r >= 0)
+      kill(r);
+    else
+      add_edge(a, c);
+    if (const int r = find(b, c); r >= 0)
+      kill(r);
+    else
+      add_edge(c, b);
+  }
+
+  std::optional<Vector3d> construct_r(const Frame& f, double height) const {
+    // Rotation construction: the apex on the circle about the edge (plane of t2 and n),
+    // the root nearest the tangent direction on the left (cos delta > 0).
+    const auto roots = S_.intersect_circle(f.M, height, f.t2, f.n);
+    double best = 1e300;
+    std::optional<Vector3d> r;
+    for (double d : roots) {
+      const double c = std::cos(d), s = std::sin(d);
+      if (c < 0.3) continue;
+      const double dev = std::fabs(std::atan2(s, c));
+      if (dev < best) {
+        best = dev;
+        r = f.M + height * (c * f.t2 + s * f.n);
+      }
+    }
+    if (!r) {
+      if (const auto p = S_.project(f.M + height * f.t2)) r = p->point;
+    }
+    return r;
+  }
+
+  void check_overlap(int a, int b, int c) {
+    const double rho = std::hypot(N_.pos[a].x(), N_.pos[a].y());
+    auto P = [&](int v) {
+      return Vector2d(rho * std::remainder(N_.params[v].x() - N_.params[a].x(), 2 * M_PI),
+                      N_.params[v].y() - N_.params[a].y());
+    };
+    const std::array<int, 3> t{a, b, c};
+    for (std::size_t k = 0; k < triangles_.size(); ++k) {
+      const auto& o = triangles_[k];
+      if ((N_.pos[o[0]] - N_.pos[a]).norm() > 40) continue;
+      // overlap if any vertex strictly inside the other or edges properly cross
+      bool bad = false;
+      for (int i = 0; i < 3 && !bad; ++i)
+        for (int j = 0; j < 3 && !bad; ++j) {
+          const int p1 = t[i], p2 = t[(i + 1) % 3], q1 = o[j], q2 = o[(j + 1) % 3];
+          if (p1 == q1 || p1 == q2 || p2 == q1 || p2 == q2) continue;
+          if (segments_cross(P(p1), P(p2), P(q1), P(q2), 1e-12)) bad = true;
+        }
+      auto inside = [&](const std::array<int, 3>& T, int v) {
+        if (v == T[0] || v == T[1] || v == T[2]) return false;
+        const Vector2d A = P(T[0]), B = P(T[1]), C = P(T[2]), X = P(v);
+        return cross2(B - A, X - A) > 1e-12 && cross2(C - B, X - B) > 1e-12 &&
+               cross2(A - C, X - C) > 1e-12;
+      };
+      for (int i = 0; i < 3; ++i) bad |= inside(t, o[i]) || inside(o, t[i]);
+      const std::set<int> st(t.begin(), t.end()), so(o.begin(), o.end());
+      if (st == so) bad = true;
+      if (bad) {
+        std::fprintf(stderr,
+                     "OVERLAP new #%zu (%d %d %d) with #%zu (%d %d %d) choice %d relaxed %d\n",
+                     triangles_.size(), a, b, c, k, o[0], o[1], o[2], last_choice_, int(relaxed_));
+        for (int v : {a, b, c, o[0], o[1], o[2]})
+          std::fprintf(stderr, "  %d: P (%g %g)\n", v, P(v).x(), P(v).y());
+        for (const auto& E : edges_)
+          if (E.alive && (E.a == a || E.b == a || E.a == b || E.b == b || E.a == c || E.b == c))
+            std::fprintf(stderr, "  front %d->%d  (%g %g)->(%g %g)\n", E.a, E.b, P(E.a).x(),
+                         P(E.a).y(), P(E.b).x(), P(E.b).y());
+        for (std::size_t k2 = 0; k2 < triangles_.size(); ++k2) {
+          const auto& o2 = triangles_[k2];
+          if (o2[0] == b || o2[1] == b || o2[2] == b)
+            std::fprintf(stderr, "  tri #%zu %d %d %d\n", k2, o2[0], o2[1], o2[2]);
+        }
+        std::abort();
+      }
+    }
+  }
+
+  Frame frame_of(int a, int b) const {
+    Frame f;
+    f.M = 0.5 * (N_.pos[a] + N_.pos[b]);
+    f.n = (N_.normal[a] + N_.normal[b]).normalized();
+    const Vector3d ab = N_.pos[b] - N_.pos[a];
+    f.t1 = (ab - ab.dot(f.n) * f.n).normalized();
+    f.t2 = f.n.cross(f.t1);
+    return f;
+  }
+
+  bool try_edge(int e, bool relaxed) {
+    relaxed_ = relaxed;
+    const int a = edges_[e].a, b = edges_[e].b;
+    const Vector3d& A = N_.pos[a];
+    const Vector3d& B = N_.pos[b];
+    Frame f;
+    f.M = 0.5 * (A + B);
+    f.n = (N_.normal[a] + N_.normal[b]).normalized();
+    Vector3d ab = B - A;
+    f.t1 = (ab - ab.dot(f.n) * f.n).normalized();
+    f.t2 = f.n.cross(f.t1);
+    const double el = ab.norm();
+    Vector2d pm = 0.5 * (N_.params[a] + N_.params[b]);
+    pm.x() = N_.params[a].x() + 0.5 * std::remainder(N_.params[b].x() - N_.params[a].x(), 2 * M_PI);
+    const double u = std::clamp(size_at(pm), 0.62 * el, 1.6 * el);
+    const double height = std::sqrt(std::max(u * u - 0.25 * el * el, 0.01 * el * el));
+    const double radius = relaxed ? 6.0 * std::max(u, el) : 2.2 * std::max(u, el);
+    const Near nr = gather(e, f, radius);
+    const double half = 0.5 * (f(B) - f(A)).norm();
+    // Existing candidates ordered by their circumcentre on the bisector (Delaunay rule).
+    std::vector<std::pair<double, int>> cand;
+    const double rho = std::max(1e-6, std::hypot(f.M.x(), f.M.y()));
+    auto pp = [&](int v) {
+      return Vector2d(rho * std::remainder(N_.params[v].x() - N_.params[a].x(), 2 * M_PI),
+                      N_.params[v].y() - N_.params[a].y());
+    };
+    const Vector2d pb = pp(b);
+    for (int v : nr.nodes) {
+      if (v == a || v == b) continue;
+      if (cross2(pb, pp(v)) <= 1e-9 * el * el) continue;  // not left of the edge
+      if (!relaxed && N_.normal[v].dot(f.n) < 0.2) continue;
+      Vector2d P = f(N_.pos[v]);
+      if (P.y() <= 1e-6 * el) {
+        if (!relaxed) continue;
+        P.y() = 1e-6 * el;
+      }
+      cand.push_back({(P.squaredNorm() - half * half) / (2 * P.y()), v});
+    }
+    std::sort(cand.begin(), cand.end());
+    int s_node = -1;
+    double s_c = 0;
+    const std::size_t tries = relaxed ? cand.size() : std::min<std::size_t>(cand.size(), 8);
+    for (std::size_t k = 0; k < tries; ++k)
+      if (visible(a, b, cand[k].second, N_.pos[cand[k].second], N_.params[cand[k].second], f, nr)) {
+        s_node = cand[k].second;
+        s_c = cand[k].first;
+        break;
+      }
+    if (relaxed && s_node >= 0 && min_angle(A, B, N_.pos[s_node]) >= 0.35) {
+      last_choice_ = 9;
+      add_triangle(e, s_node);
+      ++stats_.chose_existing;
+      return true;
+    }
+    // The new candidate R and NEW-IS-PREFERRED (circumcentre rule with S_c as a third choice).
+    const auto r = construct_r(f, height);
+    enum { kR, kS, kSc } choice = kS;
+    if (r) {
+      const Vector2d R = f(*r);
+      if (R.y() > 1e-6 * el) {
+        const double r_c = (R.squaredNorm() - half * half) / (2 * R.y());
+        const double r_bar = R.y();
+        if (s_node < 0 || s_c >= r_bar) {
+          choice = kR;
+        } else if (s_c <= r_c) {
+          choice = kS;
+        } else {
+          const double frac = (s_c - r_c) / (r_bar - r_c);  // 0 at R_c, 1 at R-bar
+          choice = frac > kL2 ? kR : (frac > kL1 ? kSc : kS);
+        }
+      }
+    }
+    auto try_new = [&](const Vector3d& x) {
+      const Vector2d p = param_of(x, N_.params[a].x());
+      const auto jet = S_.evaluate(p.x(), p.y());
+      if (!jet) return false;
+      const Vector3d pos = jet->position;
+      if (!relaxed && jet->normal().dot(f.n) < 0.2) return false;
+      if (!clear_of_front(pos, u, e, nr) || !visible(a, b, -1, pos, p, f, nr)) return false;
+      if (min_angle(A, B, pos) < 0.35) return false;  // ~20 deg: never build a sliver
+      const int c = N_.add(p, S_);
+      if (c < 0) return false;
+      last_choice_ = choice;
+      add_triangle(e, c);
+      ++stats_.steiner_points;
+      return true;
+    };
+    if (choice == kSc) {
+      const Vector3d x = f.M + s_c * f.t2;
+      const auto pr = S_.project(x);
+      if (pr && try_new(pr->point)) {
+        ++stats_.chose_circumcentre;
+        return true;
+      }
+    }
+    // An existing candidate that would make a sliver (< ~20 deg) gives way to R if R is valid.
+    if (choice == kS && s_node >= 0 && r && min_angle(A, B, N_.pos[s_node]) < 0.35) choice = kR;
+    if (choice == kR && r && try_new(*r)) {
+      ++stats_.chose_new;
+      return true;
+    }
+    // No usable S, or S would make a sliver: try a lower apex (the thesis's shrink by a third,
+    // twice) before giving in.
+    if (s_node < 0 || min_angle(A, B, N_.pos[s_node]) < 0.35) {
+      for (double shrink : {2.0 / 3.0, 4.0 / 9.0}) {
+        const auto r2 = construct_r(f, std::max(height * shrink, 0.45 * el));
+        if (r2 && try_new(*r2)) {
+          ++stats_.chose_new;
+          return true;
+        }
+      }
+    }
+    if (s_node >= 0) {
+      last_choice_ = 10 + choice;
+      add_triangle(e, s_node);
+      ++stats_.chose_existing;
+      return true;
+    }
+    return false;
+  }
+
+  // L1, L2 of NEW-IS-PREFERRED as fractions of [R_c, R-bar] measured from R_c
+  // (docs/animation-meshes.md): S_c in the upper third -> R, middle third -> S_c, lower -> S.
+  static constexpr double kL1 = 1.0 / 3.0, kL2 = 2.0 / 3.0;
+
+  NodeStore& N_;
+  const ScanSurface& S_;
+  const RegionMeshInput& in_;
+  RegionMeshStats& stats_;
+  std::uint64_t rng_;
+  std::vector<FEdge> edges_;
+  std::unordered_map<std::uint64_t, int> index_;
+  std::vector<int> alive_;
+  double cell_ = 1.0, max_len_ = 0.0;
+  std::unordered_map<std::int64_t, std::vector<int>> grid_;
+  std::vector<int> pool_;
+  std::priority_queue<std::pair<double, int>> heap_;
+  std::vector<std::array<int, 3>> triangles_;
+  bool progress_ = false;
+  int last_choice_ = -1;
+  bool relaxed_ = false;
+};
+
+}  // namespace
+
+std::vector<std::array<int, 3>> aft_mesh_region(NodeStore& nodes, const ScanSurface& surface,
+                                                const RegionMeshInput& input,
+                                                RegionMeshStats& stats) {
+  Mesher m(nodes, surface, input, stats);
+  auto tris = m.run();
+  stats.triangles = static_cast<int>(tris.size());
+  return tris;
+}
+
+}  // namespace scanmesh::aft::detail

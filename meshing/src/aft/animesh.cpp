@@ -1,0 +1,407 @@
+// Stitching the region meshes into one animation mesh, the final 3D Delaunay flips and
+// tangential smoothing, and the quality report.
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <set>
+#include <sstream>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "aft_internal.h"
+#include "scanmesh/core/errors.h"
+
+namespace scanmesh::aft {
+
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+
+namespace {
+
+std::uint64_t ukey(int a, int b) {
+  if (a > b) std::swap(a, b);
+  return (static_cast<std::uint64_t>(a) << 32) | static_cast<std::uint32_t>(b);
+}
+
+double angle_at(const Vector3d& p, const Vector3d& q, const Vector3d& r) {
+  const Vector3d u = q - p, v = r - p;
+  return std::atan2(u.cross(v).norm(), u.dot(v));
+}
+
+double tri_min_angle(const Vector3d& a, const Vector3d& b, const Vector3d& c) {
+  return std::min({angle_at(a, b, c), angle_at(b, c, a), angle_at(c, a, b)});
+}
+
+// Edge flips that raise the smaller of the two triangles' minimum angles (max-min in 3D),
+// never across a constraint, never producing a triangle that faces away from the surface.
+int delaunay_flips(std::vector<std::array<int, 3>>& T, const std::vector<Vector3d>& P,
+                   const std::vector<Vector3d>& normal,
+                   const std::unordered_set<std::uint64_t>& constraint) {
+  int flips = 0;
+  for (int pass = 0; pass < 30; ++pass) {
+    std::unordered_map<std::uint64_t, std::array<int, 2>> adj;
+    for (std::size_t t = 0; t < T.size(); ++t)
+      for (int k = 0; k < 3; ++k) {
+        auto& e = adj.try_emplace(ukey(T[t][k], T[t][(k + 1) % 3]), std::array<int, 2>{-1, -1})
+                      .first->second;
+        (e[0] < 0 ? e[0] : e[1]) = static_cast<int>(t);
+      }
+    std::vector<std::uint64_t> keys;
+    keys.reserve(adj.size());
+    for (const auto& kv : adj) keys.push_back(kv.first);
+    std::sort(keys.begin(), keys.end());  // deterministic order
+    int pass_flips = 0;
+    for (const std::uint64_t key : keys) {
+      if (constraint.count(key)) continue;
+      const auto it = adj.find(key);
+      if (it == adj.end()) continue;
+      const auto [t1, t2] = it->second;
+      if (t1 < 0 || t2 < 0) continue;
+      const int p = static_cast<int>(key >> 32), q = static_cast<int>(key & 0xffffffffu);
+      auto opposite = [&](int t) {
+        for (int k = 0; k < 3; ++k)
+          if (T[t][k] != p && T[t][k] != q) return T[t][k];
+        return -1;
+      };
+      // orient so that t1 = (p, q, r)
+      int a = p, b = q;
+      {
+        int k = 0;
+        while (T[t1][k] != a) ++k;
+        if (T[t1][(k + 1) % 3] != b) std::swap(a, b);
+      }
+      const int r = opposite(t1), s = opposite(t2);
+      if (r < 0 || s < 0 || r == s || adj.count(ukey(r, s))) continue;
+      const double before =
+          std::min(tri_min_angle(P[a], P[b], P[r]), tri_min_angle(P[b], P[a], P[s]));
+      const double after =
+          std::min(tri_min_angle(P[r], P[a], P[s]), tri_min_angle(P[s], P[b], P[r]));
+      if (after <= before + 1e-6) continue;
+      auto faces_out = [&](int x, int y, int z) {
+        const Vector3d n = (P[y] - P[x]).cross(P[z] - P[x]);
+        const Vector3d m = normal[x] + normal[y] + normal[z];
+        return n.dot(m) > 0.05 * n.norm() * m.norm();
+      };
+      if (!faces_out(r, a, s) || !faces_out(s, b, r)) continue;
+      T[t1] = {r, a, s};
+      T[t2] = {s, b, r};
+      adj.erase(it);
+      adj[ukey(r, s)] = {t1, t2};
+      // the outer edges a-s (was in t2) and b-r (was in t1) change owners
+      auto reown = [&](int x, int y, int from, int to) {
+        auto& e = adj[ukey(x, y)];
+        for (int& v : e)
+          if (v == from) v = to;
+      };
+      reown(a, s, t2, t1);
+      reown(b, r, t1, t2);
+      ++pass_flips;
+    }
+    flips += pass_flips;
+    if (pass_flips == 0) break;
+  }
+  return flips;
+}
+
+}  // namespace
+
+AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
+                                   const ScanSurface& surface, const RegionSettings& settings) {
+  const SegmentNodes seg = initialise_segments(g, lines, surface, settings);
+  detail::NodeStore store;
+  for (std::size_t i = 0; i < seg.params.size(); ++i)
+    if (store.add(seg.params[i], surface) < 0)
+      throw InvalidInputError("segment node " + std::to_string(i) + " is off the scan surface");
+  const std::size_t boundary_nodes = store.params.size();
+  AnimationMesh am;
+  std::vector<std::array<int, 3>> tris;
+  std::vector<int> labels;
+  for (std::size_t r = 0; r < g.regions.size(); ++r) {
+    const Region& reg = g.regions[r];
+    if (reg.opening) continue;
+    if (const char* only = std::getenv("SCANMESH_AFT_ONLY");
+        only && std::atoi(only) != static_cast<int>(r))
+      continue;
+    detail::RegionMeshInput in;
+    in.unit_mm = reg.unit_mm > 0 ? reg.unit_mm : settings.default_unit_mm;
+    in.strategy = settings.strategy;
+    in.chordal_tolerance_mm = settings.chordal_tolerance_mm;
+    in.min_unit_mm = settings.min_unit_mm;
+    in.seed = settings.seed + 1000003ull * r;
+    if (const char* m = std::getenv("SCANMESH_AFT_MAX_STEPS"))
+      in.max_steps = std::strtoul(m, nullptr, 10);
+    std::vector<int> cycles{reg.outer};
+    cycles.insert(cycles.end(), reg.inner.begin(), reg.inner.end());
+    // The region as the polygon of its boundary nodes (the chords the front starts from, not
+    // the curves: a chord cutting a curved opening's corner must not count as leaving).
+    for (int c : cycles) {
+      std::vector<Vector2d> poly;
+      for (const HalfEdgeRef& he : g.cycles[c].edges) {
+        std::vector<int> chain = seg.chains[he.segment];
+        if (!he.forward) std::reverse(chain.begin(), chain.end());
+        for (std::size_t k = 0; k + 1 < chain.size(); ++k) {
+          Vector2d p = seg.params[chain[k]];
+          if (!poly.empty())
+            p.x() = poly.back().x() + std::remainder(p.x() - poly.back().x(), 2 * M_PI);
+          poly.push_back(p);
+        }
+      }
+      in.polygons.push_back(poly);
+    }
+    for (int c : cycles)
+      for (const HalfEdgeRef& he : g.cycles[c].edges) {
+        std::vector<int> chain = seg.chains[he.segment];
+        if (!he.forward) std::reverse(chain.begin(), chain.end());
+        for (std::size_t k = 0; k + 1 < chain.size(); ++k)
+          in.front.push_back({chain[k], chain[k + 1]});
+      }
+    RegionMeshStats st;
+    st.region = static_cast<int>(r);
+    const auto t = detail::aft_mesh_region(store, surface, in, st);
+    for (const auto& x : t) {
+      tris.push_back(x);
+      labels.push_back(static_cast<int>(r));
+    }
+    am.region_stats.push_back(st);
+  }
+  // Constraint edges: every segment chain.
+  std::unordered_set<std::uint64_t> constraint;
+  for (const auto& chain : seg.chains)
+    for (std::size_t k = 0; k + 1 < chain.size(); ++k)
+      constraint.insert(ukey(chain[k], chain[k + 1]));
+  am.flips = delaunay_flips(tris, store.pos, store.normal, constraint);
+  // Tangential smoothing of Steiner points: towards the neighbours' centroid, back onto the
+  // surface, kept only if the smallest incident angle grows.
+  {
+    std::vector<std::vector<int>> vt(store.pos.size());
+    for (std::size_t t = 0; t < tris.size(); ++t)
+      for (int v : tris[t]) vt[v].push_back(static_cast<int>(t));
+    for (int it = 0; it < settings.smooth_iterations; ++it) {
+      for (std::size_t v = boundary_nodes; v < store.pos.size(); ++v) {
+        if (vt[v].empty()) continue;
+        Vector3d c = Vector3d::Zero();
+        int n = 0;
+        double before = 1e9;
+        for (int t : vt[v]) {
+          before = std::min(before, tri_min_angle(store.pos[tris[t][0]], store.pos[tris[t][1]],
+                                                  store.pos[tris[t][2]]));
+          for (int w : tris[t])
+            if (w != static_cast<int>(v)) {
+              c += store.pos[w];
+              ++n;
+            }
+        }
+        c /= n;
+        const auto pr = surface.project(c);
+        if (!pr) continue;
+        const Vector2d old_param = store.params[v];
+        const Vector3d old_pos = store.pos[v], old_n = store.normal[v];
+        if (!store.move(static_cast<int>(v), detail::param_of(pr->point, old_param.x()), surface))
+          continue;
+        double after = 1e9;
+        bool ok = true;
+        for (int t : vt[v]) {
+          const Vector3d &a = store.pos[tris[t][0]], &b = store.pos[tris[t][1]],
+                         &d = store.pos[tris[t][2]];
+          after = std::min(after, tri_min_angle(a, b, d));
+          const Vector3d nn = (b - a).cross(d - a);
+          if (nn.dot(store.normal[v]) <= 0.3 * nn.norm()) ok = false;
+        }
+        if (!ok || after <= before) {
+          store.params[v] = old_param;
+          store.pos[v] = old_pos;
+          store.normal[v] = old_n;
+        }
+      }
+    }
+  }
+  am.flips += delaunay_flips(tris, store.pos, store.normal, constraint);
+  // Compact: drop nodes no triangle uses (segments bordering nothing meshed).
+  std::vector<int> used(store.pos.size(), 0);
+  for (const auto& t : tris)
+    for (int v : t) used[v] = 1;
+  // Nodes of opening/seam chains stay even if unused? No: only used nodes are mesh vertices.
+  std::vector<int> remap(store.pos.size(), -1);
+  for (std::size_t v = 0; v < store.pos.size(); ++v)
+    if (used[v]) {
+      remap[v] = static_cast<int>(am.mesh.positions.size());
+      am.mesh.positions.push_back(store.pos[v]);
+      am.params.push_back(store.params[v]);
+      am.steiner.push_back(v >= boundary_nodes);
+    }
+  for (std::size_t t = 0; t < tris.size(); ++t) {
+    am.mesh.triangles.push_back({remap[tris[t][0]], remap[tris[t][1]], remap[tris[t][2]]});
+    am.mesh.face_labels.push_back(labels[t]);
+  }
+  for (std::size_t s = 0; s < seg.chains.size(); ++s) {
+    std::vector<int> chain;
+    bool complete = true;
+    for (int v : seg.chains[s]) {
+      chain.push_back(remap[v]);
+      complete &= remap[v] >= 0;
+    }
+    am.segment_chains.push_back(chain);
+    if (!complete) continue;
+    for (std::size_t k = 0; k + 1 < chain.size(); ++k) {
+      am.line_edges.push_back({chain[k], chain[k + 1]});
+      am.line_edge_line.push_back(g.segments[s].line);
+    }
+  }
+  // Seams: each seam line's node list in line order (segments are in line order already).
+  for (std::size_t s = 0; s < g.segments.size(); ++s) {
+    const AnimationLine& line = lines.lines[g.segments[s].line];
+    if (line.kind != LineKind::Seam) continue;
+    auto& list = am.seams[line.id];
+    for (int v : am.segment_chains[s])
+      if (list.empty() || list.back() != v) list.push_back(v);
+  }
+  am.mesh.compute_vertex_normals();
+  return am;
+}
+
+std::string AnimationMeshQuality::to_text() const {
+  std::ostringstream os;
+  os.precision(4);
+  os << "min angle " << min_angle_deg << " deg (" << min_angle_non_exempt_deg
+     << " deg away from sharp line junctions, " << small_angle_exempt
+     << " triangles exempt), max angle " << max_angle_deg << " deg\n";
+  os << "min angle >= 30 deg: " << 100 * fraction_min_angle_ge_30
+     << " %, >= 20 deg: " << 100 * fraction_min_angle_ge_20 << " %\n";
+  os << "q = 2 r_in / R_circ: mean " << mean_q << ", min " << min_q << "\n";
+  os << "Hausdorff to the scan surface: mesh->surface " << hausdorff_mesh_to_surface_mm
+     << " mm, surface->mesh " << hausdorff_surface_to_mesh_mm << " mm; max vertex offset "
+     << max_vertex_offset_mm << " mm\n";
+  os << "valence:";
+  for (const auto& [v, n] : valence_histogram) os << " " << v << ":" << n;
+  os << "\ntriangles per region:";
+  for (std::size_t r = 0; r < triangles_per_region.size(); ++r)
+    if (triangles_per_region[r]) os << " " << r << ":" << triangles_per_region[r];
+  os << "\n";
+  return os.str();
+}
+
+namespace {
+double point_triangle_distance(const Vector3d& p, const Vector3d& a, const Vector3d& b,
+                               const Vector3d& c) {
+  const Vector3d n = (b - a).cross(c - a);
+  const double nn = n.squaredNorm();
+  if (nn > 0) {
+    const Vector3d q = p - n * ((p - a).dot(n) / nn);
+    const double u = (b - q).cross(c - q).dot(n), v = (c - q).cross(a - q).dot(n),
+                 w = (a - q).cross(b - q).dot(n);
+    if (u >= 0 && v >= 0 && w >= 0) return (p - q).norm();
+  }
+  auto seg = [&](const Vector3d& x, const Vector3d& y) {
+    const Vector3d d = y - x;
+    const double t =
+        d.squaredNorm() > 0 ? std::clamp((p - x).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
+    return (x + t * d - p).norm();
+  };
+  return std::min({seg(a, b), seg(b, c), seg(c, a)});
+}
+}  // namespace
+
+AnimationMeshQuality evaluate_quality(const AnimationMesh& am, const ScanSurface& surface,
+                                      int samples) {
+  AnimationMeshQuality q;
+  const auto& P = am.mesh.positions;
+  const auto& T = am.mesh.triangles;
+  std::unordered_set<std::uint64_t> line_edge;
+  for (const auto& e : am.line_edges) line_edge.insert(ukey(e[0], e[1]));
+  q.min_angle_deg = 180;
+  q.min_angle_non_exempt_deg = 180;
+  q.min_q = 1;
+  int ge30 = 0, ge20 = 0;
+  std::vector<int> valence(P.size(), 0);
+  std::unordered_set<std::uint64_t> edges;
+  for (std::size_t t = 0; t < T.size(); ++t) {
+    const auto& f = T[t];
+    std::array<double, 3> ang{};
+    for (int k = 0; k < 3; ++k) ang[k] = angle_at(P[f[k]], P[f[(k + 1) % 3]], P[f[(k + 2) % 3]]);
+    const int kmin = static_cast<int>(std::min_element(ang.begin(), ang.end()) - ang.begin());
+    const double mn = ang[kmin] * 180 / M_PI,
+                 mx = *std::max_element(ang.begin(), ang.end()) * 180 / M_PI;
+    q.min_angle_deg = std::min(q.min_angle_deg, mn);
+    q.max_angle_deg = std::max(q.max_angle_deg, mx);
+    const bool exempt = mn < 20 && line_edge.count(ukey(f[kmin], f[(kmin + 1) % 3])) &&
+                        line_edge.count(ukey(f[kmin], f[(kmin + 2) % 3]));
+    if (exempt)
+      ++q.small_angle_exempt;
+    else
+      q.min_angle_non_exempt_deg = std::min(q.min_angle_non_exempt_deg, mn);
+    ge30 += mn >= 30;
+    ge20 += mn >= 20;
+    q.min_angle_histogram[std::min(11, static_cast<int>(mn / 5))]++;
+    const double a = (P[f[1]] - P[f[0]]).norm(), b = (P[f[2]] - P[f[1]]).norm(),
+                 c = (P[f[0]] - P[f[2]]).norm();
+    const double area = 0.5 * (P[f[1]] - P[f[0]]).cross(P[f[2]] - P[f[0]]).norm();
+    const double s = 0.5 * (a + b + c);
+    const double qq = s > 0 && a * b * c > 0 ? 8 * area * area / (s * a * b * c) : 0;
+    q.mean_q += qq;
+    q.min_q = std::min(q.min_q, qq);
+    q.q_histogram[std::clamp(static_cast<int>(qq * 10), 0, 9)]++;
+    for (int k = 0; k < 3; ++k) edges.insert(ukey(f[k], f[(k + 1) % 3]));
+    const int label = t < am.mesh.face_labels.size() ? am.mesh.face_labels[t] : 0;
+    if (label >= static_cast<int>(q.triangles_per_region.size()))
+      q.triangles_per_region.resize(label + 1);
+    q.triangles_per_region[label]++;
+  }
+  for (const auto k : edges) {
+    valence[k >> 32]++;
+    valence[k & 0xffffffffu]++;
+  }
+  for (int v : valence)
+    if (v) q.valence_histogram[v]++;
+  if (!T.empty()) {
+    q.mean_q /= T.size();
+    q.fraction_min_angle_ge_30 = static_cast<double>(ge30) / T.size();
+    q.fraction_min_angle_ge_20 = static_cast<double>(ge20) / T.size();
+  }
+  for (const Vector3d& p : P)
+    if (const auto pr = surface.project(p))
+      q.max_vertex_offset_mm = std::max(q.max_vertex_offset_mm, pr->distance);
+  // Two-way sampled Hausdorff: points on each triangle projected onto the surface, and surface
+  // points over each triangle's (phi, h) footprint measured to that triangle and its neighbours.
+  std::unordered_map<std::uint64_t, std::vector<int>> edge_faces;
+  for (std::size_t t = 0; t < T.size(); ++t)
+    for (int k = 0; k < 3; ++k)
+      edge_faces[ukey(T[t][k], T[t][(k + 1) % 3])].push_back(static_cast<int>(t));
+  const int n = std::max(2, samples);
+  for (std::size_t t = 0; t < T.size(); ++t) {
+    const auto& f = T[t];
+    Vector2d pa = am.params[f[0]], pb = am.params[f[1]], pc = am.params[f[2]];
+    pb.x() = pa.x() + std::remainder(pb.x() - pa.x(), 2 * M_PI);
+    pc.x() = pa.x() + std::remainder(pc.x() - pa.x(), 2 * M_PI);
+    std::vector<int> near{static_cast<int>(t)};
+    for (int k = 0; k < 3; ++k)
+      for (int o : edge_faces[ukey(f[k], f[(k + 1) % 3])])
+        if (o != static_cast<int>(t)) near.push_back(o);
+    for (int i = 0; i <= n; ++i)
+      for (int j = 0; i + j <= n; ++j) {
+        const double u = double(i) / n, v = double(j) / n, w = 1 - u - v;
+        const Vector3d x = w * P[f[0]] + u * P[f[1]] + v * P[f[2]];
+        // Closest-point projection can stop in a far local minimum (e.g. behind an ear); the
+        // radial foot point bounds the true distance from above.
+        double dist = 1e300;
+        if (const auto pr = surface.project(x)) dist = pr->distance;
+        if (const auto im = surface.implicit(x)) dist = std::min(dist, std::fabs(im->value));
+        // The surface point over the sample's (phi, h) is a third upper bound (tight where the
+        // first two fail: near-horizontal parts such as the crown).
+        const Vector2d pp0 = w * pa + u * pb + v * pc;
+        if (const auto y0 = surface.position(pp0.x(), pp0.y()))
+          dist = std::min(dist, (*y0 - x).norm());
+        if (dist < 1e299)
+          q.hausdorff_mesh_to_surface_mm = std::max(q.hausdorff_mesh_to_surface_mm, dist);
+        const Vector2d pp = w * pa + u * pb + v * pc;
+        if (const auto y = surface.position(pp.x(), pp.y())) {
+          double d = 1e300;
+          for (int o : near)
+            d = std::min(d, point_triangle_distance(*y, P[T[o][0]], P[T[o][1]], P[T[o][2]]));
+          q.hausdorff_surface_to_mesh_mm = std::max(q.hausdorff_surface_to_mesh_mm, d);
+        }
+      }
+  }
+  return q;
+}
+
+}  // namespace scanmesh::aft

@@ -1,0 +1,159 @@
+// Region settings: YAML / JSON (docs/formats.md, "Region settings").
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "scanmesh/core/errors.h"
+#include "scanmesh/meshing/aft/regions.h"
+
+namespace scanmesh::aft {
+
+namespace {
+
+double positive(const YAML::Node& n, const std::string& file, const std::string& key) {
+  double v = 0;
+  try {
+    v = n.as<double>();
+  } catch (const YAML::Exception&) {
+    throw FileFormatError(file, key + " must be a number");
+  }
+  if (!std::isfinite(v) || v <= 0) throw FileFormatError(file, key + " must be positive");
+  return v;
+}
+
+std::string text(const YAML::Node& n, const std::string& file, const std::string& key) {
+  if (!n.IsScalar()) throw FileFormatError(file, key + " must be a string");
+  return n.as<std::string>();
+}
+
+std::string mesher_name(const YAML::Node& n, const std::string& file, const std::string& key) {
+  const std::string m = text(n, file, key);
+  if (m != "aft" && m != "delaunay")
+    throw FileFormatError(file, key + " must be \"aft\" or \"delaunay\", not \"" + m + "\"");
+  return m;
+}
+
+}  // namespace
+
+RegionSettings parse_region_settings(std::string_view source, const std::string& file) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(std::string(source));
+  } catch (const YAML::Exception& e) {
+    throw FileFormatError(file, std::string("not valid YAML/JSON: ") + e.what());
+  }
+  RegionSettings s;
+  if (root.IsNull()) return s;
+  if (!root.IsMap()) throw FileFormatError(file, "expected a mapping at the top level");
+  try {
+    for (const auto& kv : root) {
+      const std::string key = kv.first.as<std::string>();
+      const YAML::Node& v = kv.second;
+      if (key == "unit_mm") {
+        s.default_unit_mm = positive(v, file, key);
+      } else if (key == "mesher") {
+        s.default_mesher = mesher_name(v, file, key);
+      } else if (key == "strategy") {
+        const std::string m = text(v, file, key);
+        if (m == "random")
+          s.strategy = EdgeStrategy::Random;
+        else if (m == "shortest")
+          s.strategy = EdgeStrategy::Shortest;
+        else if (m == "longest")
+          s.strategy = EdgeStrategy::Longest;
+        else
+          throw FileFormatError(file, "strategy must be random, shortest or longest");
+      } else if (key == "segment_init") {
+        const std::string m = text(v, file, key);
+        if (m == "equidistant")
+          s.segment_init = SegmentInit::Equidistant;
+        else if (m == "curvature")
+          s.segment_init = SegmentInit::Curvature;
+        else
+          throw FileFormatError(file, "segment_init must be equidistant or curvature");
+      } else if (key == "curvature_weight_mm") {
+        s.curvature_weight_mm = positive(v, file, key);
+      } else if (key == "chordal_tolerance_mm") {
+        s.chordal_tolerance_mm = positive(v, file, key);
+      } else if (key == "min_unit_mm") {
+        s.min_unit_mm = positive(v, file, key);
+      } else if (key == "relax_iterations" || key == "smooth_iterations") {
+        const int n = v.as<int>();
+        if (n < 0 || n > 1000) throw FileFormatError(file, key + " must be in 0..1000");
+        (key == "relax_iterations" ? s.relax_iterations : s.smooth_iterations) = n;
+      } else if (key == "seed") {
+        s.seed = v.as<std::uint64_t>();
+      } else if (key == "regions") {
+        if (!v.IsSequence()) throw FileFormatError(file, "regions must be a list");
+        int index = 0;
+        for (const auto& r : v) {
+          const std::string where = "regions[" + std::to_string(index++) + "]";
+          if (!r.IsMap()) throw FileFormatError(file, where + " must be a mapping");
+          RegionRule rule;
+          rule.name = where;
+          for (const auto& rk : r) {
+            const std::string k = rk.first.as<std::string>();
+            const YAML::Node& rv = rk.second;
+            if (k == "name") {
+              rule.name = text(rv, file, where + ".name");
+            } else if (k == "point") {
+              if (!rv.IsSequence() || rv.size() != 2)
+                throw FileFormatError(file, where + ".point must be [x, y] in texture pixels");
+              const Eigen::Vector2d p(rv[0].as<double>(), rv[1].as<double>());
+              if (!p.allFinite()) throw FileFormatError(file, where + ".point is not finite");
+              rule.point_px = p;
+            } else if (k == "unit_mm") {
+              rule.unit_mm = positive(rv, file, where + ".unit_mm");
+            } else if (k == "mesher") {
+              rule.mesher = mesher_name(rv, file, where + ".mesher");
+            } else {
+              throw FileFormatError(file, where + ": unknown key \"" + k + "\"");
+            }
+          }
+          if (!rule.point_px)
+            throw FileFormatError(file, where + " needs a point inside the region");
+          s.regions.push_back(rule);
+        }
+      } else {
+        throw FileFormatError(file, "unknown key \"" + key + "\"");
+      }
+    }
+  } catch (const YAML::Exception& e) {
+    throw FileFormatError(file, std::string("wrong value type: ") + e.what());
+  }
+  if (s.min_unit_mm > s.default_unit_mm)
+    throw FileFormatError(file, "min_unit_mm is larger than unit_mm");
+  return s;
+}
+
+RegionSettings read_region_settings(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError("cannot read region settings '" + path.string() + "'");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_region_settings(ss.str(), path.string());
+}
+
+void apply_region_settings(RegionGraph& g, const RegionSettings& s, const ScanSurface& surface) {
+  for (Region& r : g.regions) {
+    r.unit_mm = s.default_unit_mm;
+    r.mesher = s.default_mesher;
+  }
+  for (const RegionRule& rule : s.regions) {
+    const auto r = g.region_at(pixel_to_param(surface, *rule.point_px));
+    if (!r) {
+      std::ostringstream os;
+      os << "region setting '" << rule.name << "': point (" << rule.point_px->x() << ", "
+         << rule.point_px->y() << ") lies in no region";
+      throw InvalidInputError(os.str());
+    }
+    Region& reg = g.regions[*r];
+    reg.name = rule.name;
+    if (rule.unit_mm) reg.unit_mm = *rule.unit_mm;
+    if (rule.mesher) reg.mesher = *rule.mesher;
+  }
+}
+
+}  // namespace scanmesh::aft

@@ -1,0 +1,514 @@
+// Region analysis: the planar graph of the animation lines on the scan cylinder. All geometry
+// here is in texture pixels (x unwrapped with period n_phi); (phi, h) only at the end. The
+// positive diagonal map pixel -> (phi, h) keeps orientations, so "counter-clockwise" means the
+// same in both.
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <sstream>
+
+#include "scanmesh/core/errors.h"
+#include "scanmesh/meshing/aft/regions.h"
+
+namespace scanmesh::aft {
+
+using Eigen::Vector2d;
+
+namespace {
+
+constexpr double kNodeMergePx = 1e-6;
+
+struct Piece {
+  Vector2d a, b;
+  int line, index;
+};
+
+struct Event {
+  double s;  // piece index + t
+  int node;
+};
+
+double shoelace(const std::vector<Vector2d>& p) {
+  double a = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const Vector2d& u = p[i];
+    const Vector2d& v = p[(i + 1) % p.size()];
+    a += u.x() * v.y() - v.x() * u.y();
+  }
+  return 0.5 * a;
+}
+
+bool point_in_polygon_plain(const std::vector<Vector2d>& poly, const Vector2d& q) {
+  bool inside = false;
+  for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
+    const Vector2d& a = poly[i];
+    const Vector2d& b = poly[j];
+    if ((a.y() > q.y()) != (b.y() > q.y())) {
+      const double x = a.x() + (q.y() - a.y()) / (b.y() - a.y()) * (b.x() - a.x());
+      if (q.x() < x) inside = !inside;
+    }
+  }
+  return inside;
+}
+
+// Point in a winding-0 polygon with x unwrapped: tries the periodic copies of q.
+bool point_in_polygon(const std::vector<Vector2d>& poly, Vector2d q, double W) {
+  if (poly.size() < 3) return false;
+  double xmin = 1e300, xmax = -1e300;
+  for (const Vector2d& p : poly) {
+    xmin = std::min(xmin, p.x());
+    xmax = std::max(xmax, p.x());
+  }
+  q.x() -= W * std::floor((q.x() - xmin) / W);
+  for (; q.x() <= xmax; q.x() += W)
+    if (point_in_polygon_plain(poly, q)) return true;
+  return false;
+}
+
+double wrap_x(double x, double W) { return x - W * std::floor(x / W); }
+
+double wrapped_distance(const Vector2d& a, const Vector2d& b, double W) {
+  double dx = std::fabs(wrap_x(a.x(), W) - wrap_x(b.x(), W));
+  dx = std::min(dx, W - dx);
+  return std::hypot(dx, a.y() - b.y());
+}
+
+struct UnionFind {
+  std::vector<int> p;
+  explicit UnionFind(int n) : p(n) { std::iota(p.begin(), p.end(), 0); }
+  int find(int x) { return p[x] == x ? x : p[x] = find(p[x]); }
+  void unite(int a, int b) { p[find(a)] = find(b); }
+};
+
+}  // namespace
+
+std::vector<Vector2d> RegionGraph::cycle_polygon(int c) const {
+  std::vector<Vector2d> poly;
+  const double period = 2 * M_PI;
+  for (const HalfEdgeRef& he : cycles[c].edges) {
+    std::vector<Vector2d> pts = segments[he.segment].pts;
+    if (!he.forward) std::reverse(pts.begin(), pts.end());
+    if (!poly.empty()) {
+      const double shift = period * std::round((poly.back().x() - pts.front().x()) / period);
+      for (Vector2d& p : pts) p.x() += shift;
+    }
+    for (std::size_t k = poly.empty() ? 0 : 1; k < pts.size(); ++k) poly.push_back(pts[k]);
+  }
+  if (poly.size() > 1) poly.pop_back();  // the closing point repeats the first (shifted)
+  return poly;
+}
+
+std::optional<int> RegionGraph::region_at(const Vector2d& param) const {
+  std::optional<int> best;
+  double best_area = 1e300;
+  for (std::size_t r = 0; r < regions.size(); ++r) {
+    if (!point_in_polygon(cycle_polygon(regions[r].outer), param, 2 * M_PI)) continue;
+    bool in_hole = false;
+    for (int h : regions[r].inner)
+      if (point_in_polygon(cycle_polygon(h), param, 2 * M_PI)) in_hole = true;
+    // A hole's polygon (its component's outside, clockwise) contains the component's inside.
+    if (in_hole) continue;
+    const double a = std::fabs(cycles[regions[r].outer].area);
+    if (a < best_area) {
+      best_area = a;
+      best = static_cast<int>(r);
+    }
+  }
+  return best;
+}
+
+std::string RegionGraph::to_text() const {
+  std::ostringstream os;
+  int openings = 0;
+  for (const Region& r : regions) openings += r.opening;
+  os << nodes.size() << " nodes, " << segments.size() << " segments, " << regions.size() - openings
+     << " regions, " << openings << " openings, " << dangling_ends.size()
+     << " dangling line ends\n";
+  for (std::size_t r = 0; r < regions.size(); ++r) {
+    const Region& g = regions[r];
+    int constraint_edges = 0;
+    for (int c : g.inner) constraint_edges += static_cast<int>(cycles[c].edges.size());
+    os << "  " << r << " " << g.name << (g.opening ? " (opening)" : "") << ": "
+       << cycles[g.outer].edges.size() << " boundary segments, " << g.inner.size()
+       << " inner loops (" << constraint_edges << " segments), area " << g.area << " rad*mm, unit "
+       << g.unit_mm << " mm, mesher " << g.mesher << "\n";
+  }
+  return os.str();
+}
+
+RegionGraph analyze_regions(const LineSet& set, const ScanSurface& surface, double snap_px) {
+  const double W = surface.n_phi();
+  const std::string& file = set.file;
+  // 1. Lines in unwrapped pixels (consecutive points less than half a turn apart).
+  std::vector<std::vector<Vector2d>> L(set.lines.size());
+  std::vector<bool> closed(set.lines.size());
+  for (std::size_t l = 0; l < set.lines.size(); ++l) {
+    closed[l] = set.lines[l].closed;
+    for (const Vector2d& p : set.lines[l].pixels) {
+      Vector2d q = p;
+      if (!L[l].empty()) q.x() += W * std::round((L[l].back().x() - q.x()) / W);
+      L[l].push_back(q);
+    }
+  }
+  auto pieces_of = [&](std::size_t l) {
+    std::vector<Piece> out;
+    const auto& p = L[l];
+    const std::size_t n = closed[l] ? p.size() : p.size() - 1;
+    for (std::size_t k = 0; k < n; ++k) {
+      Vector2d b = p[(k + 1) % p.size()];
+      if (k + 1 == p.size()) b.x() += W * std::round((p[k].x() - b.x()) / W);
+      out.push_back({p[k], b, static_cast<int>(l), static_cast<int>(k)});
+    }
+    return out;
+  };
+  // 2. Snap open ends onto other lines.
+  auto closest_on = [&](const Vector2d& q, const Piece& pc, double& t) {
+    Vector2d a = pc.a, b = pc.b;
+    const double shift = W * std::round((q.x() - 0.5 * (a.x() + b.x())) / W);
+    a.x() += shift;
+    b.x() += shift;
+    const Vector2d d = b - a;
+    t = d.squaredNorm() > 0 ? std::clamp((q - a).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
+    return Vector2d(a + t * d);
+  };
+  for (std::size_t l = 0; l < L.size(); ++l) {
+    if (closed[l]) continue;
+    for (int end = 0; end < 2; ++end) {
+      Vector2d& q = end == 0 ? L[l].front() : L[l].back();
+      double best = snap_px;
+      std::optional<Vector2d> target;
+      for (std::size_t m = 0; m < L.size(); ++m) {
+        if (m == l) continue;
+        for (const Piece& pc : pieces_of(m)) {
+          double t;
+          const Vector2d c = closest_on(q, pc, t);
+          // Prefer the other line's end points: joining ends should land on them exactly.
+          const double d = (c - q).norm() - ((t == 0.0 || t == 1.0) ? 1e-9 : 0.0);
+          if (d < best) {
+            best = d;
+            target = c;
+          }
+        }
+      }
+      if (target) q = *target;
+    }
+  }
+  std::vector<std::vector<Piece>> P(L.size());
+  for (std::size_t l = 0; l < L.size(); ++l) P[l] = pieces_of(l);
+
+  // 3. Intersections -> events on both lines.
+  std::vector<Vector2d> node_pos;
+  std::vector<std::vector<Event>> events(L.size());
+  auto add_node = [&](Vector2d p) {
+    p.x() = wrap_x(p.x(), W);
+    node_pos.push_back(p);
+    return static_cast<int>(node_pos.size()) - 1;
+  };
+  auto who = [&](int l) { return "line '" + set.lines[l].id + "' (" + set.lines[l].source + ")"; };
+  for (std::size_t l = 0; l < L.size(); ++l)
+    for (std::size_t m = l; m < L.size(); ++m)
+      for (const Piece& p : P[l])
+        for (const Piece& q0 : P[m]) {
+          const int np = static_cast<int>(P[l].size());
+          if (l == m) {
+            if (q0.index <= p.index) continue;
+            const bool adjacent =
+                q0.index == p.index + 1 || (closed[l] && p.index == 0 && q0.index == np - 1);
+            if (adjacent) continue;
+          }
+          const Vector2d pmin = p.a.cwiseMin(p.b), pmax = p.a.cwiseMax(p.b);
+          for (int k = -1; k <= 1; ++k) {
+            Piece q = q0;
+            const double shift =
+                W * (std::round((0.5 * (p.a.x() + p.b.x()) - 0.5 * (q.a.x() + q.b.x())) / W) + k);
+            q.a.x() += shift;
+            q.b.x() += shift;
+            const Vector2d qmin = q.a.cwiseMin(q.b), qmax = q.a.cwiseMax(q.b);
+            if (qmin.x() > pmax.x() + 1e-9 || qmax.x() < pmin.x() - 1e-9 ||
+                qmin.y() > pmax.y() + 1e-9 || qmax.y() < pmin.y() - 1e-9)
+              continue;
+            const Vector2d r = p.b - p.a, s = q.b - q.a, w = q.a - p.a;
+            const double den = r.x() * s.y() - r.y() * s.x();
+            const double scale = r.norm() * s.norm();
+            double t, u;
+            if (std::fabs(den) <= 1e-12 * scale) {
+              // Parallel: only a shared end point counts; overlapping collinear pieces fail.
+              const double cross = w.x() * r.y() - w.y() * r.x();
+              if (std::fabs(cross) > 1e-9 * r.norm()) continue;
+              const double t0 = w.dot(r) / r.squaredNorm();
+              const double t1 = (q.b - p.a).dot(r) / r.squaredNorm();
+              const double lo = std::max(0.0, std::min(t0, t1)),
+                           hi = std::min(1.0, std::max(t0, t1));
+              if (hi < lo - 1e-12) continue;
+              if (hi - lo > 1e-9) {
+                if (l == m) throw FileFormatError(file, who(l) + " runs back over itself");
+                throw FileFormatError(file, who(l) + " and " + who(m) + " overlap");
+              }
+              t = lo;
+              u = std::fabs(t0 - t) < std::fabs(t1 - t) ? 0.0 : 1.0;
+            } else {
+              t = (w.x() * s.y() - w.y() * s.x()) / den;
+              u = (w.x() * r.y() - w.y() * r.x()) / den;
+              if (t < -1e-12 || t > 1 + 1e-12 || u < -1e-12 || u > 1 + 1e-12) continue;
+              t = std::clamp(t, 0.0, 1.0);
+              u = std::clamp(u, 0.0, 1.0);
+            }
+            if (l == m) {
+              // Touching at the shared vertex of a closed line's last and first pieces is not a
+              // crossing; anything else is.
+              std::ostringstream os;
+              const Vector2d x = p.a + t * r;
+              os.precision(1);
+              os << std::fixed << who(l) << " intersects itself at pixel (" << wrap_x(x.x(), W)
+                 << ", " << x.y() << ")";
+              throw FileFormatError(file, os.str());
+            }
+            const int node = add_node(p.a + t * r);
+            events[l].push_back({p.index + t, node});
+            events[m].push_back({q0.index + u, node});
+          }
+        }
+  // 4. Open ends are nodes too.
+  for (std::size_t l = 0; l < L.size(); ++l) {
+    if (closed[l]) continue;
+    events[l].push_back({0.0, add_node(L[l].front())});
+    events[l].push_back({static_cast<double>(P[l].size()), add_node(L[l].back())});
+  }
+  // 5. Merge coincident nodes.
+  UnionFind uf(static_cast<int>(node_pos.size()));
+  for (std::size_t i = 0; i < node_pos.size(); ++i)
+    for (std::size_t j = i + 1; j < node_pos.size(); ++j)
+      if (wrapped_distance(node_pos[i], node_pos[j], W) < kNodeMergePx * 100)
+        uf.unite(static_cast<int>(i), static_cast<int>(j));
+  std::vector<int> node_id(node_pos.size(), -1);
+  RegionGraph g;
+  std::vector<Vector2d> node_px;
+  for (std::size_t i = 0; i < node_pos.size(); ++i) {
+    const int root = uf.find(static_cast<int>(i));
+    if (node_id[root] < 0) {
+      node_id[root] = static_cast<int>(node_px.size());
+      node_px.push_back(node_pos[root]);
+    }
+    node_id[i] = node_id[root];
+  }
+  // 6. Segments between consecutive events of each line.
+  auto point_at = [&](std::size_t l, double s) {
+    const int k = std::min(static_cast<int>(std::floor(s)), static_cast<int>(P[l].size()) - 1);
+    const Piece& pc = P[l][std::max(k, 0)];
+    return Vector2d(pc.a + (s - pc.index) * (pc.b - pc.a));
+  };
+  std::vector<std::vector<Vector2d>> seg_px;
+  for (std::size_t l = 0; l < L.size(); ++l) {
+    auto& ev = events[l];
+    for (Event& e : ev) e.node = node_id[e.node];
+    std::sort(ev.begin(), ev.end(), [](const Event& a, const Event& b) {
+      return a.s < b.s || (a.s == b.s && a.node < b.node);
+    });
+    std::vector<Event> uniq;
+    for (const Event& e : ev)
+      if (uniq.empty() || e.s - uniq.back().s > 1e-9 || e.node != uniq.back().node)
+        uniq.push_back(e);
+    const double smax = static_cast<double>(P[l].size());
+    if (closed[l]) {
+      if (uniq.size() > 1 && uniq.back().node == uniq.front().node &&
+          smax - uniq.back().s + uniq.front().s < 1e-9)
+        uniq.pop_back();
+      if (uniq.empty()) {
+        uniq.push_back({0.0, static_cast<int>(node_px.size())});
+        node_px.push_back(Vector2d(wrap_x(L[l][0].x(), W), L[l][0].y()));
+      }
+    }
+    const std::size_t nseg = closed[l] ? uniq.size() : uniq.size() - 1;
+    for (std::size_t k = 0; k < nseg; ++k) {
+      const Event a = uniq[k];
+      Event b = uniq[(k + 1) % uniq.size()];
+      double sb = b.s;
+      if (closed[l] && k + 1 == uniq.size()) sb += smax;
+      if (sb - a.s < 1e-12) continue;
+      std::vector<Vector2d> pts;
+      auto at = [&](double s) {
+        double off = 0;
+        if (closed[l] && s >= smax) {
+          s -= smax;
+          off = P[l].back().b.x() - L[l][0].x();  // one trip round: the unwrapping offset
+        }
+        Vector2d p = point_at(l, s);
+        p.x() += off;
+        return p;
+      };
+      pts.push_back(at(a.s));
+      for (double v = std::floor(a.s) + 1; v < sb - 1e-12; v += 1) pts.push_back(at(v));
+      pts.push_back(at(sb));
+      // make continuous
+      for (std::size_t i = 1; i < pts.size(); ++i)
+        pts[i].x() += W * std::round((pts[i - 1].x() - pts[i].x()) / W);
+      Segment seg;
+      seg.line = static_cast<int>(l);
+      seg.node0 = a.node;
+      seg.node1 = b.node;
+      g.segments.push_back(seg);
+      seg_px.push_back(pts);
+    }
+  }
+  // 7. Half-edges sorted round each node; faces by "next = previous counter-clockwise".
+  const int nh = 2 * static_cast<int>(g.segments.size());
+  auto start_of = [&](int he) {
+    const Segment& s = g.segments[he / 2];
+    return he % 2 == 0 ? s.node0 : s.node1;
+  };
+  auto dir_of = [&](int he) {
+    const auto& p = seg_px[he / 2];
+    if (he % 2 == 0) {
+      for (std::size_t i = 1; i < p.size(); ++i)
+        if ((p[i] - p[0]).norm() > 1e-9) return Vector2d(p[i] - p[0]);
+    } else {
+      for (std::size_t i = p.size() - 1; i-- > 0;)
+        if ((p[i] - p.back()).norm() > 1e-9) return Vector2d(p[i] - p.back());
+    }
+    return Vector2d(1, 0);
+  };
+  std::vector<std::vector<int>> out(node_px.size());
+  for (int he = 0; he < nh; ++he) out[start_of(he)].push_back(he);
+  std::vector<int> pos_in(nh);
+  for (auto& o : out) {
+    std::sort(o.begin(), o.end(), [&](int a, int b) {
+      const Vector2d da = dir_of(a), db = dir_of(b);
+      const double aa = std::atan2(da.y(), da.x()), ab = std::atan2(db.y(), db.x());
+      return aa < ab || (aa == ab && a < b);
+    });
+    for (std::size_t k = 0; k < o.size(); ++k) pos_in[o[k]] = static_cast<int>(k);
+  }
+  auto next_of = [&](int he) {
+    const int twin = he ^ 1;
+    const auto& o = out[start_of(twin)];
+    const int k = pos_in[twin];
+    return o[(k - 1 + static_cast<int>(o.size())) % o.size()];
+  };
+  // Segments in (phi, h) for the graph.
+  for (std::size_t s = 0; s < g.segments.size(); ++s)
+    for (const Vector2d& p : seg_px[s]) g.segments[s].pts.push_back(pixel_to_param(surface, p));
+  for (const Vector2d& p : node_px) {
+    Vector2d q = pixel_to_param(surface, p);
+    g.nodes.push_back(q);
+  }
+  // Components.
+  UnionFind comp(static_cast<int>(node_px.size()));
+  for (const Segment& s : g.segments) comp.unite(s.node0, s.node1);
+  std::vector<int> cycle_of(nh, -1);
+  for (int he = 0; he < nh; ++he) {
+    if (cycle_of[he] >= 0) continue;
+    BoundaryCycle c;
+    c.component = comp.find(start_of(he));
+    int cur = he;
+    do {
+      cycle_of[cur] = static_cast<int>(g.cycles.size());
+      c.edges.push_back({cur / 2, cur % 2 == 0});
+      cur = next_of(cur);
+    } while (cur != he && c.edges.size() <= static_cast<std::size_t>(nh));
+    g.cycles.push_back(c);
+    const std::vector<Vector2d> poly = g.cycle_polygon(static_cast<int>(g.cycles.size()) - 1);
+    // winding: phi advance over the closed walk
+    double advance = 0;
+    for (const HalfEdgeRef& e : c.edges) {
+      const auto& pts = g.segments[e.segment].pts;
+      advance += (e.forward ? 1 : -1) * (pts.back().x() - pts.front().x());
+    }
+    g.cycles.back().winding = static_cast<int>(std::lround(advance / (2 * M_PI)));
+    g.cycles.back().area = g.cycles.back().winding == 0 ? shoelace(poly) : 0.0;
+  }
+  // 8. Regions: counter-clockwise winding-0 cycles; the others go to the smallest region of
+  // another component containing them (holes, free-standing internal lines).
+  std::vector<int> region_of_cycle(g.cycles.size(), -1);
+  for (std::size_t c = 0; c < g.cycles.size(); ++c) {
+    const BoundaryCycle& cy = g.cycles[c];
+    if (cy.winding != 0 || cy.area <= 1e-12) continue;
+    Region r;
+    r.outer = static_cast<int>(c);
+    r.opening = true;
+    for (const HalfEdgeRef& e : cy.edges)
+      if (set.lines[g.segments[e.segment].line].kind != LineKind::Opening) r.opening = false;
+    region_of_cycle[c] = static_cast<int>(g.regions.size());
+    g.regions.push_back(r);
+  }
+  for (std::size_t c = 0; c < g.cycles.size(); ++c) {
+    const BoundaryCycle& cy = g.cycles[c];
+    if (region_of_cycle[c] >= 0 || cy.winding != 0) continue;
+    const Vector2d q = g.nodes[start_of(cy.edges[0].forward ? 2 * cy.edges[0].segment
+                                                            : 2 * cy.edges[0].segment + 1)];
+    int best = -1;
+    double best_area = 1e300;
+    for (std::size_t r = 0; r < g.regions.size(); ++r) {
+      const BoundaryCycle& oc = g.cycles[g.regions[r].outer];
+      if (oc.component == cy.component) continue;
+      if (oc.area < best_area &&
+          point_in_polygon(g.cycle_polygon(g.regions[r].outer), q, 2 * M_PI)) {
+        best = static_cast<int>(r);
+        best_area = oc.area;
+      }
+    }
+    if (best >= 0) {
+      g.regions[best].inner.push_back(static_cast<int>(c));
+      region_of_cycle[c] = best;
+    }
+  }
+  for (std::size_t s = 0; s < g.segments.size(); ++s) {
+    g.segments[s].left_region = region_of_cycle[cycle_of[2 * s]];
+    g.segments[s].right_region = region_of_cycle[cycle_of[2 * s + 1]];
+  }
+  for (std::size_t n = 0; n < out.size(); ++n)
+    if (out[n].size() == 1) g.dangling_ends.push_back(static_cast<int>(n));
+  // Areas, names and label points.
+  for (std::size_t r = 0; r < g.regions.size(); ++r) {
+    Region& reg = g.regions[r];
+    reg.name = "region-" + std::to_string(r);
+    reg.area = g.cycles[reg.outer].area;
+    for (int c : reg.inner) reg.area += g.cycles[c].area;  // holes are negative
+    const auto poly = g.cycle_polygon(reg.outer);
+    Vector2d lo = poly[0], hi = poly[0];
+    for (const Vector2d& p : poly) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    std::vector<std::vector<Vector2d>> holes;
+    for (int c : reg.inner) holes.push_back(g.cycle_polygon(c));
+    double best = -1;
+    reg.label_point = poly[0];
+    constexpr int kGrid = 24;
+    for (int i = 1; i < kGrid; ++i)
+      for (int j = 1; j < kGrid; ++j) {
+        const Vector2d q(lo.x() + (hi.x() - lo.x()) * i / kGrid,
+                         lo.y() + (hi.y() - lo.y()) * j / kGrid);
+        if (!point_in_polygon(poly, q, 2 * M_PI)) continue;
+        bool bad = false;
+        for (const auto& h : holes)
+          if (point_in_polygon(h, q, 2 * M_PI)) bad = true;
+        if (bad) continue;
+        // clearance in pixels to the outer boundary and holes
+        double d = 1e300;
+        auto clear = [&](const std::vector<Vector2d>& pl) {
+          for (std::size_t k = 0; k < pl.size(); ++k) {
+            const Vector2d a = param_to_pixel(surface, pl[k]);
+            const Vector2d b = param_to_pixel(surface, pl[(k + 1) % pl.size()]);
+            Vector2d qq = param_to_pixel(surface, q);
+            qq.x() += W * std::round((0.5 * (a.x() + b.x()) - qq.x()) / W);
+            const Vector2d ab = b - a;
+            const double t = ab.squaredNorm() > 0
+                                 ? std::clamp((qq - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0)
+                                 : 0.0;
+            d = std::min(d, (a + t * ab - qq).norm());
+          }
+        };
+        clear(poly);
+        for (const auto& h : holes) clear(h);
+        if (d > best) {
+          best = d;
+          reg.label_point = q;
+        }
+      }
+    reg.label_point.x() =
+        surface.phi0() + std::fmod(reg.label_point.x() - surface.phi0() + 8 * M_PI, 2 * M_PI);
+  }
+  return g;
+}
+
+}  // namespace scanmesh::aft
