@@ -124,3 +124,8 @@ struct ParticlesArgs {
 int run_particles(const ParticlesArgs& args);
 
 }  // namespace scanmesh::cli
+
+// --- seed 001 adaptive remeshing: apps/src/cmd_remesh.cpp ---
+namespace scanmesh::cli {
+void register_remesh_commands(CLI::App& app, CommandList& commands);
+}  // namespace scanmesh::cli

@@ -185,6 +185,7 @@ int main(int argc, char** argv) {
 
   // Stages added later register their subcommands here, one line each (commands.h).
   CommandList commands;
+  register_remesh_commands(app, commands);
 
   try {
     app.parse(argc, argv);
