@@ -134,7 +134,10 @@ class Remesher {
   // ---- operations (return true when applied) ----
   bool collapse(int v, int w);  // removes v
   int split(int v, int w);      // returns the new vertex or -1
-  bool flip(int v, int w);
+  bool flip(int v, int w, bool check = true);
+  int flip_delta(int v, int w) const;  // change of R (3.22) by flipping, 1000 if impossible
+  bool drive(int b, int w, int side);
+  std::array<int, 2> last_flip_{-1, -1};
   bool move_to(int v, const Vec3& x);       // free vertex, 3D target (projected)
   bool move_skeleton(int v, double s_new);  // skeleton vertex, 1D
   bool flip_improves_valence(int v, int w) const;
@@ -511,7 +514,7 @@ int Remesher::split(int v, int w) {
   return u;
 }
 
-bool Remesher::flip(int v, int w) {
+bool Remesher::flip(int v, int w, bool check) {
   if (is_skel(v, w)) return false;
   const std::vector<int> ef = m_.edge_faces(v, w);
   if (ef.size() != 2) return false;
@@ -526,7 +529,8 @@ bool Remesher::flip(int v, int w) {
   if (a == b || m_.edge_face_count(a, b) > 0) return false;
   m_.replace_corner(f1, w, b);  // (v, b, a)
   m_.replace_corner(f2, v, a);  // (w, a, b)
-  if (!face_ok(f1) || !face_ok(f2)) {
+  last_flip_ = {a, b};
+  if (check && (!face_ok(f1) || !face_ok(f2))) {
     m_.replace_corner(f1, b, w);
     m_.replace_corner(f2, a, v);
     ++st_.rejected_error;
@@ -568,12 +572,14 @@ bool Remesher::move_skeleton(int v, double s_new) {
   return true;
 }
 
-bool Remesher::flip_improves_valence(int v, int w) const {
-  if (is_skel(v, w)) return false;
+bool Remesher::flip_improves_valence(int v, int w) const { return flip_delta(v, w) < 0; }
+
+int Remesher::flip_delta(int v, int w) const {
+  if (is_skel(v, w)) return 1000;
   const std::vector<int> ef = m_.edge_faces(v, w);
-  if (ef.size() != 2) return false;
+  if (ef.size() != 2) return 1000;
   const int a = m_.opposite(ef[0], v, w), b = m_.opposite(ef[1], v, w);
-  if (a == b) return false;
+  if (a == b || m_.edge_face_count(a, b) > 0) return 1000;
   const int dv = deviation(v, ef[0]), dw = deviation(w, ef[0]);
   const int da = deviation(a, ef[0]), db = deviation(b, ef[1]);
   // (4.3)-weighted: a skeleton vertex's per-side deviation counts double (d_p = 2 d^_p + 2).
@@ -583,8 +589,46 @@ bool Remesher::flip_improves_valence(int v, int w) const {
     const int before = k * d, after = k * (d + change);
     return after * after - before * before;
   };
-  const int dr = term(v, dv, -1) + term(w, dw, -1) + term(a, da, 1) + term(b, db, 1);
-  return dr < 0;
+  return term(v, dv, -1) + term(w, dw, -1) + term(a, da, 1) + term(b, db, 1);
+}
+
+bool Remesher::drive(int b, int w, int side) {
+  // §3.8 drive edge (b black, w white): flip the edge (w, x) of a triangle (b, w, x); the pair
+  // reappears on the far side of that quad. Moved at most drive_limit steps; kept only if R
+  // dropped on the way (a simple edge appeared and was flipped), otherwise undone.
+  std::vector<std::array<int, 2>> log;
+  int total = 0;
+  for (int step = 0; step < o_.drive_limit; ++step) {
+    const auto ef = m_.edge_faces(b, w);
+    if (ef.size() != 2 || is_skel(b, w)) break;
+    // The side whose quad moves the pair away from where it came from: smallest index first.
+    int x = m_.opposite(ef[side], b, w);
+    const int d = flip_delta(w, x);
+    if (d >= 1000) break;
+    const auto fx = m_.edge_faces(w, x);
+    const int y = m_.opposite(fx[0], w, x) == b ? m_.opposite(fx[1], w, x) : m_.opposite(fx[0], w, x);
+    if (!flip(w, x)) break;
+    log.push_back(last_flip_);
+    total += d;
+    // Simple edges around the moved pair.
+    for (int c : {x, y})
+      for (int z : m_.neighbours(c)) {
+        const int dz = flip_delta(c, z);
+        if (dz < 0 && flip(c, z)) {
+          log.push_back(last_flip_);
+          total += dz;
+        }
+      }
+    if (total < 0) return true;
+    if (!(deviation(x, m_.vfaces[x][0]) < 0 && deviation(y, m_.vfaces[y][0]) > 0)) break;
+    if (m_.edge_face_count(x, y) == 0) break;
+    b = x;
+    w = y;
+  }
+  if (total < 0) return true;
+  for (auto it = log.rbegin(); it != log.rend(); ++it) flip((*it)[0], (*it)[1], false);
+  st_.flips -= 2 * log.size();
+  return false;
 }
 
 bool Remesher::flip_improves_angle(int v, int w) const {
@@ -861,6 +905,21 @@ void Remesher::regularize() {
     }
   }
   flip_pass(false);
+  // Drive edges: black-white pairs moved until they meet another irregular vertex.
+  for (int round = 0; round < 10; ++round) {
+    int ok = 0;
+    for (auto k : m_.edges()) {
+      int v = edge_key_first(k), w = edge_key_second(k);
+      if (!m_.vertex_alive[v] || !m_.vertex_alive[w] || is_skel(v, w)) continue;
+      const auto ef = m_.edge_faces(v, w);
+      if (ef.size() != 2) continue;
+      int dv = deviation(v, ef[0]), dw = deviation(w, ef[0]);
+      if (dv > 0 && dw < 0) std::swap(v, w), std::swap(dv, dw);
+      if (dv < 0 && dw > 0 && (drive(v, w, 0) || drive(v, w, 1))) ++ok;
+    }
+    flip_pass(false);
+    if (ok == 0) break;
+  }
   (void)changed;
 }
 
