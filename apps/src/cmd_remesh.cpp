@@ -36,13 +36,13 @@ struct RemeshArgs {
 int run_remesh(const RemeshArgs& a) {
   using namespace remeshing;
   PrepareStats ps;
-  const Mesh input = prepare_input(read_ply(a.mesh), {.min_component_faces = a.min_component,
-                                                      .max_hole_edges = a.fill_holes},
-                                   &ps);
+  const Mesh input =
+      prepare_input(read_ply(a.mesh),
+                    {.min_component_faces = a.min_component, .max_hole_edges = a.fill_holes}, &ps);
   if (a.min_component > 0 || a.fill_holes > 0)
-    std::cout << "prepare: removed " << ps.components_removed << " components ("
-              << ps.faces_removed << " faces), closed " << ps.holes_filled << " holes ("
-              << ps.faces_added << " faces)\n";
+    std::cout << "prepare: removed " << ps.components_removed << " components (" << ps.faces_removed
+              << " faces), closed " << ps.holes_filled << " holes (" << ps.faces_added
+              << " faces)\n";
   RemeshOptions o;
   o.target_vertices = a.vertices;
   o.scheme = parse_remesh_scheme(a.scheme);
@@ -70,10 +70,11 @@ int run_remesh(const RemeshArgs& a) {
   std::ostringstream json;
   json << "{\n\"input\": \"" << a.mesh << "\",\n\"target_vertices\": " << a.vertices
        << ",\n\"scheme\": \"" << a.scheme << "\",\n\"gamma\": " << o.density.gamma
-       << ",\n\"n_filter\": " << a.filter << ",\n\"stats\": {\"input_vertices\": "
-       << s.input_vertices << ", \"input_faces\": " << s.input_faces
-       << ", \"output_vertices\": " << s.output_vertices << ", \"output_faces\": "
-       << s.output_faces << ", \"skeleton_segments\": " << s.skeleton_segments
+       << ",\n\"n_filter\": " << a.filter
+       << ",\n\"stats\": {\"input_vertices\": " << s.input_vertices
+       << ", \"input_faces\": " << s.input_faces << ", \"output_vertices\": " << s.output_vertices
+       << ", \"output_faces\": " << s.output_faces
+       << ", \"skeleton_segments\": " << s.skeleton_segments
        << ", \"branch_vertices\": " << s.branch_vertices << ", \"patches\": " << s.patches
        << ", \"collapses\": " << s.collapses << ", \"splits\": " << s.splits
        << ", \"flips\": " << s.flips << ", \"moves\": " << s.moves
@@ -84,9 +85,8 @@ int run_remesh(const RemeshArgs& a) {
        << ", \"seconds_setup\": " << s.seconds_setup << ", \"seconds_adapt\": " << s.seconds_adapt
        << ", \"seconds_count\": " << s.seconds_count
        << ", \"seconds_regularize\": " << s.seconds_regularize
-       << ", \"seconds_smooth\": " << s.seconds_smooth
-       << ", \"seconds_total\": " << s.seconds_total << "},\n\"quality\": " << q.to_json()
-       << "}\n";
+       << ", \"seconds_smooth\": " << s.seconds_smooth << ", \"seconds_total\": " << s.seconds_total
+       << "},\n\"quality\": " << q.to_json() << "}\n";
   write_file_atomically(dir / "report.json", json.str());
   write_png(dir / "quality.png", render_quality(r));
   write_png(dir / "histograms.png", quality_histograms(q));
@@ -95,8 +95,8 @@ int run_remesh(const RemeshArgs& a) {
             << s.seconds_total << " s\n"
             << "  skeleton: " << s.skeleton_segments << " segments, " << s.branch_vertices
             << " branch vertices, " << s.patches << " patches\n"
-            << "  min angle " << q.min_angle_deg << " deg, >= 30 deg: "
-            << 100 * q.fraction_min_angle_ge_30 << " %, mean Q " << q.q_mean
+            << "  min angle " << q.min_angle_deg
+            << " deg, >= 30 deg: " << 100 * q.fraction_min_angle_ge_30 << " %, mean Q " << q.q_mean
             << ", irregular valence " << 100 * q.fraction_irregular << " %\n"
             << "  Hausdorff " << q.hausdorff << " mm (" << 100 * q.hausdorff / q.bbox_diagonal
             << " % of the diagonal), mean distance " << q.mean_distance << " mm";
@@ -118,7 +118,8 @@ void register_remesh_commands(CLI::App& app, CommandList& commands) {
   c->add_option("--vertices", args->vertices, "Target vertex count")->required();
   c->add_option("--features", args->features,
                 "Feature lines file (docs/formats.md) or 'auto' (sharp edges by dihedral angle)");
-  c->add_option("--sharp", args->sharp_deg, "Dihedral angle (deg) of sharp edges for --features auto");
+  c->add_option("--sharp", args->sharp_deg,
+                "Dihedral angle (deg) of sharp edges for --features auto");
   c->add_option("--gamma", args->gamma, "Density contrast gamma (0: uniform)");
   c->add_option("--filter", args->filter, "n_filter smoothing passes of the density");
   c->add_option("--clip", args->clip, "Max ratio of target edge length to its median");

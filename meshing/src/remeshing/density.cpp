@@ -41,7 +41,8 @@ std::vector<double> estimate_kappa_max(const NmMesh& m) {
           }
     if (ring.size() < 5) continue;
     const Eigen::Vector3d nz = normal[v].normalized();
-    Eigen::Vector3d ax = std::abs(nz.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    Eigen::Vector3d ax =
+        std::abs(nz.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
     const Eigen::Vector3d ex = (ax - ax.dot(nz) * nz).normalized();
     const Eigen::Vector3d ey = nz.cross(ex);
     // z = a x^2 + b xy + c y^2 + d x + e y (through the vertex).

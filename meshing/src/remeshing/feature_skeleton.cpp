@@ -43,7 +43,8 @@ int count_fans(const NmMesh& m, int v, const std::unordered_map<std::uint64_t, i
       if (skel_edges.count(k) || skel_set.count(k)) continue;
       for (std::size_t j = i + 1; j < fs.size(); ++j) {
         const auto& t = m.tri[fs[j]];
-        if (t[0] == c || t[1] == c || t[2] == c) parent[find(static_cast<int>(i))] = find(static_cast<int>(j));
+        if (t[0] == c || t[1] == c || t[2] == c)
+          parent[find(static_cast<int>(i))] = find(static_cast<int>(j));
       }
     }
   int n = 0;
@@ -85,7 +86,8 @@ FeatureLines parse_feature_lines(const std::string& text, const std::string& nam
       out.lines.push_back(std::move(ids));
     } else if (word == "fixed") {
       if (ids.empty())
-        throw FileFormatError(name, "line " + std::to_string(line_no) + ": 'fixed' without vertices");
+        throw FileFormatError(name,
+                              "line " + std::to_string(line_no) + ": 'fixed' without vertices");
       out.fixed.insert(out.fixed.end(), ids.begin(), ids.end());
     } else {
       throw FileFormatError(name, "line " + std::to_string(line_no) + ": unknown keyword '" +
@@ -187,8 +189,7 @@ FeatureSkeleton build_feature_skeleton(const NmMesh& m, const FeatureLines& line
       }
     }
   for (int v : lines.fixed)
-    if (v >= nv)
-      throw InvalidInputError("fixed vertex " + std::to_string(v) + " is out of range");
+    if (v >= nv) throw InvalidInputError("fixed vertex " + std::to_string(v) + " is out of range");
 
   // Skeleton adjacency.
   std::vector<std::vector<int>> sadj(nv);

@@ -193,8 +193,10 @@ void Remesher::build_input() {
       const double ang = std::acos(std::clamp(e1.dot(e2), -1.0, 1.0));
       const int p = sk_.face_patch[f];
       auto it = std::find_if(acc.begin(), acc.end(), [&](const auto& a) { return a.first == p; });
-      if (it == acc.end()) acc.push_back({p, ang * fn0_[f]});
-      else it->second += ang * fn0_[f];
+      if (it == acc.end())
+        acc.push_back({p, ang * fn0_[f]});
+      else
+        it->second += ang * fn0_[f];
     }
     for (int f : fs) {
       const auto& t = m0_.tri[f];
@@ -416,7 +418,8 @@ bool Remesher::collapse(int v, int w) {
       return ++st_.rejected_topology, false;
   }
   for (int a : opp)
-    if (vs_[a].kind == VertexKind::Free && m_.valence(a) <= 3) return ++st_.rejected_topology, false;
+    if (vs_[a].kind == VertexKind::Free && m_.valence(a) <= 3)
+      return ++st_.rejected_topology, false;
   if (vs_[w].kind == VertexKind::Free && nv.size() + nw.size() < 8)
     return ++st_.rejected_topology, false;
   // New state of w: midpoint between two free or two skeleton vertices, else w stays.
@@ -606,7 +609,8 @@ bool Remesher::drive(int b, int w, int side) {
     const int d = flip_delta(w, x);
     if (d >= 1000) break;
     const auto fx = m_.edge_faces(w, x);
-    const int y = m_.opposite(fx[0], w, x) == b ? m_.opposite(fx[1], w, x) : m_.opposite(fx[0], w, x);
+    const int y =
+        m_.opposite(fx[0], w, x) == b ? m_.opposite(fx[1], w, x) : m_.opposite(fx[0], w, x);
     if (!flip(w, x)) break;
     log.push_back(last_flip_);
     total += d;
@@ -690,7 +694,8 @@ void Remesher::collapse_short() {
         std::swap(v, w);
       }
       bool too_long = false;
-      const Vec3 mid = (vs_[v].kind == vs_[w].kind) ? Vec3(0.5 * (m_.pos[v] + m_.pos[w])) : m_.pos[w];
+      const Vec3 mid =
+          (vs_[v].kind == vs_[w].kind) ? Vec3(0.5 * (m_.pos[v] + m_.pos[w])) : m_.pos[w];
       for (int x : m_.neighbours(v))
         if ((m_.pos[x] - mid).norm() > 4.0 / 3.0 * target(x, w)) too_long = true;
       if (too_long) continue;
@@ -826,8 +831,8 @@ void Remesher::skeleton_density_control() {
       all_split &= s;
     }
     if (all_collapse) {
-      int rm = (vs_[v].kind == VertexKind::Skeleton && (vs_[w].kind != VertexKind::Skeleton ||
-                                                        side_valence(v, ef[0]) == 1))
+      int rm = (vs_[v].kind == VertexKind::Skeleton &&
+                (vs_[w].kind != VertexKind::Skeleton || side_valence(v, ef[0]) == 1))
                    ? v
                    : w;
       const int keep = rm == v ? w : v;

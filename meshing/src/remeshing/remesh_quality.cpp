@@ -66,7 +66,8 @@ class TriangleGrid {
       const auto ia = index(a), ib = index(b);
       for (int z = ia[2]; z <= ib[2]; ++z)
         for (int y = ia[1]; y <= ib[1]; ++y)
-          for (int x = ia[0]; x <= ib[0]; ++x) items.push_back({cell_id(x, y, z), static_cast<int>(f)});
+          for (int x = ia[0]; x <= ib[0]; ++x)
+            items.push_back({cell_id(x, y, z), static_cast<int>(f)});
     }
     std::sort(items.begin(), items.end());
     faces_.resize(items.size());
@@ -87,7 +88,8 @@ class TriangleGrid {
       for (int z = c[2] - r; z <= c[2] + r; ++z)
         for (int y = c[1] - r; y <= c[1] + r; ++y)
           for (int x = c[0] - r; x <= c[0] + r; ++x) {
-            if (std::max({std::abs(x - c[0]), std::abs(y - c[1]), std::abs(z - c[2])}) != r) continue;
+            if (std::max({std::abs(x - c[0]), std::abs(y - c[1]), std::abs(z - c[2])}) != r)
+              continue;
             if (x < 0 || y < 0 || z < 0 || x >= n_[0] || y >= n_[1] || z >= n_[2]) continue;
             const std::size_t id = cell_id(x, y, z);
             for (std::size_t i = start_[id]; i < start_[id + 1]; ++i) {
@@ -234,20 +236,23 @@ std::string RemeshQuality::to_json() const {
   std::ostringstream o;
   o.precision(6);
   o << "{\n  \"vertices\": " << vertices << ",\n  \"faces\": " << faces
-    << ",\n  \"min_angle_deg\": " << min_angle_deg << ",\n  \"mean_min_angle_deg\": "
-    << mean_min_angle_deg << ",\n  \"fraction_min_angle_ge_30\": " << fraction_min_angle_ge_30
+    << ",\n  \"min_angle_deg\": " << min_angle_deg
+    << ",\n  \"mean_min_angle_deg\": " << mean_min_angle_deg
+    << ",\n  \"fraction_min_angle_ge_30\": " << fraction_min_angle_ge_30
     << ",\n  \"q_mean\": " << q_mean << ",\n  \"q_max\": " << (std::isfinite(q_max) ? q_max : 1e308)
     << ",\n  \"q_histogram\": [";
   for (std::size_t i = 0; i < q_histogram.size(); ++i) o << (i ? ", " : "") << q_histogram[i];
   o << "],\n  \"min_angle_histogram_5deg\": [";
   for (std::size_t i = 0; i < angle_histogram.size(); ++i)
     o << (i ? ", " : "") << angle_histogram[i];
-  o << "],\n  \"valence_counted\": " << valence_counted << ",\n  \"valence_optimal\": "
-    << valence_optimal << ",\n  \"fraction_irregular\": " << fraction_irregular
-    << ",\n  \"hausdorff_mm\": " << hausdorff << ",\n  \"hausdorff_output_to_input_mm\": "
-    << hausdorff_out_to_in << ",\n  \"hausdorff_input_to_output_mm\": " << hausdorff_in_to_out
-    << ",\n  \"mean_distance_mm\": " << mean_distance << ",\n  \"bbox_diagonal_mm\": "
-    << bbox_diagonal << ",\n  \"self_intersections\": "
+  o << "],\n  \"valence_counted\": " << valence_counted
+    << ",\n  \"valence_optimal\": " << valence_optimal
+    << ",\n  \"fraction_irregular\": " << fraction_irregular
+    << ",\n  \"hausdorff_mm\": " << hausdorff
+    << ",\n  \"hausdorff_output_to_input_mm\": " << hausdorff_out_to_in
+    << ",\n  \"hausdorff_input_to_output_mm\": " << hausdorff_in_to_out
+    << ",\n  \"mean_distance_mm\": " << mean_distance
+    << ",\n  \"bbox_diagonal_mm\": " << bbox_diagonal << ",\n  \"self_intersections\": "
     << (self_intersections_checked ? std::to_string(self_intersections) : "null") << "\n}\n";
   return o.str();
 }
@@ -265,7 +270,8 @@ Image8 render_quality(const RemeshResult& r, int view_size) {
     std::sort(l.begin(), l.end());
     l.erase(std::unique(l.begin(), l.end()), l.end());
     const int opt = optimal_valence(r.kind[v], r.sides[v]);
-    if (opt) mark[v] = static_cast<int>(l.size()) > opt ? 1 : (static_cast<int>(l.size()) < opt ? -1 : 0);
+    if (opt)
+      mark[v] = static_cast<int>(l.size()) > opt ? 1 : (static_cast<int>(l.size()) < opt ? -1 : 0);
   }
   // Unshared corners so each face has its own colour; irregular corners white / black.
   Mesh s;

@@ -39,7 +39,7 @@ struct SkeletonOptions {
   //! vertex of largest turn within that reach, so staircase boundaries of scans are not cut
   //! into one-edge segments.
   double kink_window = 3.0;
-  bool label_borders = true;     //!< edges between faces of different labels are skeleton
+  bool label_borders = true;  //!< edges between faces of different labels are skeleton
 };
 
 enum class VertexKind : std::uint8_t { Free, Skeleton, Branch };

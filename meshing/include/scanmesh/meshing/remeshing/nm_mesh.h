@@ -31,7 +31,7 @@ class NmMesh {
 
   std::vector<Eigen::Vector3d> pos;
   std::vector<std::array<int, 3>> tri;
-  std::vector<int> label;               //!< per face
+  std::vector<int> label;                //!< per face
   std::vector<std::vector<int>> vfaces;  //!< per vertex: live incident faces
   std::vector<char> face_alive, vertex_alive;
 

@@ -25,9 +25,9 @@ RemeshScheme parse_remesh_scheme(const std::string& name);  //!< "regularize" | 
 std::string to_string(RemeshScheme s);
 
 struct DensityOptions {
-  double gamma = 3.0;     //!< Psi <- Psi^gamma on the normalised field; 0: uniform
-  int n_filter = 10;      //!< neighbour-mean passes (3.3), across the skeleton too
-  double clip = 4.0;      //!< Psi^(1/2) (target edge length) clipped to [m/clip, m*clip], m = median
+  double gamma = 3.0;  //!< Psi <- Psi^gamma on the normalised field; 0: uniform
+  int n_filter = 10;   //!< neighbour-mean passes (3.3), across the skeleton too
+  double clip = 4.0;   //!< Psi^(1/2) (target edge length) clipped to [m/clip, m*clip], m = median
   std::vector<double> user;  //!< per input vertex Psi (replaces the curvature field when set)
 };
 
@@ -74,8 +74,8 @@ struct RemeshStats {
   int output_vertices = 0, output_faces = 0;
   std::size_t skeleton_segments = 0, branch_vertices = 0, patches = 0;
   std::size_t collapses = 0, splits = 0, flips = 0, moves = 0;
-  std::size_t rejected_error = 0;      //!< operations undone by E_dist / E_glatt
-  std::size_t rejected_topology = 0;   //!< link condition / skeleton rules
+  std::size_t rejected_error = 0;     //!< operations undone by E_dist / E_glatt
+  std::size_t rejected_topology = 0;  //!< link condition / skeleton rules
   std::size_t skeleton_splits = 0, skeleton_collapses = 0;  //!< (4.5) / (4.4)
   double seconds_setup = 0, seconds_adapt = 0, seconds_count = 0, seconds_regularize = 0,
          seconds_smooth = 0, seconds_total = 0;

@@ -19,9 +19,9 @@ namespace scanmesh::remeshing {
 struct RemeshQuality {
   std::size_t vertices = 0, faces = 0;
   double min_angle_deg = 0, mean_min_angle_deg = 0, fraction_min_angle_ge_30 = 0;
-  double q_mean = 0, q_max = 0;             //!< Q = R / (2 r), 1 = equilateral
-  std::array<std::size_t, 10> q_histogram{};  //!< bins [1,1.1), [1.1,1.2) ... [1.9, inf)
-  std::array<std::size_t, 12> angle_histogram{};  //!< min angle, 5 deg bins over [0, 60]
+  double q_mean = 0, q_max = 0;                          //!< Q = R / (2 r), 1 = equilateral
+  std::array<std::size_t, 10> q_histogram{};             //!< bins [1,1.1), [1.1,1.2) ... [1.9, inf)
+  std::array<std::size_t, 12> angle_histogram{};         //!< min angle, 5 deg bins over [0, 60]
   std::size_t valence_counted = 0, valence_optimal = 0;  //!< free + skeleton vertices
   double fraction_irregular = 0;
   double hausdorff_out_to_in = 0, hausdorff_in_to_out = 0, hausdorff = 0, mean_distance = 0;
