@@ -204,7 +204,8 @@ FeatureSkeleton build_feature_skeleton(const NmMesh& m, const FeatureLines& line
   for (const auto& [k, fs] : efaces)
     mean_edge += (m.pos[edge_key_first(k)] - m.pos[edge_key_second(k)]).norm();
   mean_edge /= std::max<double>(1, static_cast<double>(efaces.size()));
-  const double reach = options.kink_window * mean_edge;
+  const double reach =
+      options.kink_reach_mm > 0 ? options.kink_reach_mm : options.kink_window * mean_edge;
   // End of the walk from v through n along degree-2 skeleton vertices for arc length `reach`.
   auto walk = [&](int v, int n) {
     int prev = v, cur = n;

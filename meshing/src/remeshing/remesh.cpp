@@ -173,7 +173,16 @@ class Remesher {
 };
 
 void Remesher::build_input() {
-  sk_ = build_feature_skeleton(m0_, o_.features, o_.skeleton);
+  SkeletonOptions so = o_.skeleton;
+  if (so.kink_reach_mm <= 0) {
+    // Mean edge length of a uniform mesh with the requested vertex count: F ~ 2 V faces of
+    // area sqrt(3)/4 h^2.
+    double area = 0;
+    for (std::size_t f = 0; f < m0_.tri.size(); ++f)
+      if (m0_.face_alive[f]) area += m0_.face_area(static_cast<int>(f));
+    so.kink_reach_mm = std::sqrt(area / (std::sqrt(3.0) / 2 * o_.target_vertices));
+  }
+  sk_ = build_feature_skeleton(m0_, o_.features, so);
   psi0_ = compute_density(m0_, o_.density);
   sq0_.resize(psi0_.size());
   for (std::size_t i = 0; i < psi0_.size(); ++i) sq0_[i] = std::sqrt(psi0_[i]);

@@ -39,6 +39,9 @@ struct SkeletonOptions {
   //! vertex of largest turn within that reach, so staircase boundaries of scans are not cut
   //! into one-edge segments.
   double kink_window = 3.0;
+  //! Absolute reach in mm; when > 0 it replaces kink_window. remesh() sets it to the mean
+  //! target edge length when it is 0, so kinks are judged at the scale of the output.
+  double kink_reach_mm = 0.0;
   bool label_borders = true;  //!< edges between faces of different labels are skeleton
 };
 
