@@ -116,7 +116,8 @@ bool to_cgal(const Mesh& m, SurfaceMesh& sm) {
   std::vector<K::Point_3> pts;
   for (const auto& p : m.positions) pts.emplace_back(p.x(), p.y(), p.z());
   std::vector<std::vector<std::size_t>> polys;
-  for (const auto& t : m.triangles) polys.push_back({std::size_t(t[0]), std::size_t(t[1]), std::size_t(t[2])});
+  for (const auto& t : m.triangles)
+    polys.push_back({std::size_t(t[0]), std::size_t(t[1]), std::size_t(t[2])});
   if (!PMP::is_polygon_soup_a_polygon_mesh(polys)) {
     // Non-manifold vertices are duplicated by the orientation step; non-manifold edges are not
     // representable at all.
@@ -139,8 +140,10 @@ int main(int argc, char** argv) {
   int target = 20000;
   bool quick = false;
   for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--quick")) quick = true;
-    else target = std::atoi(argv[i]);
+    if (!std::strcmp(argv[i], "--quick"))
+      quick = true;
+    else
+      target = std::atoi(argv[i]);
   }
   // The demo's head: simulate, clean, grid mesh; then the same clean-up for both remeshers.
   const auto scan = sim::simulate_scan(sim::builtin_head_scene(), sim::builtin_head_scanner());
@@ -148,17 +151,20 @@ int main(int argc, char** argv) {
   clean_grid(grid);
   const Mesh raw = grid_mesh(grid).mesh;
   remeshing::PrepareStats ps;
-  const Mesh in = remeshing::prepare_input(raw, {.min_component_faces = 500, .max_hole_edges = 100}, &ps);
-  std::printf("head grid mesh: %zu vertices, %zu triangles; prepared: %zu vertices, %zu triangles "
-              "(%zu crumbs removed, %zu holes closed)\n\n",
-              raw.positions.size(), raw.triangles.size(), in.positions.size(), in.triangles.size(),
-              ps.components_removed, ps.holes_filled);
-  std::printf("| method | time [s] | vertices | min angle [deg] | tri >= 30 deg [%%] | mean Q | "
-              "irregular valence [%%] | Hausdorff [mm] | mean dist [mm] | self-intersections |\n"
-              "|---|---|---|---|---|---|---|---|---|---|\n");
+  const Mesh in =
+      remeshing::prepare_input(raw, {.min_component_faces = 500, .max_hole_edges = 100}, &ps);
+  std::printf(
+      "head grid mesh: %zu vertices, %zu triangles; prepared: %zu vertices, %zu triangles "
+      "(%zu crumbs removed, %zu holes closed)\n\n",
+      raw.positions.size(), raw.triangles.size(), in.positions.size(), in.triangles.size(),
+      ps.components_removed, ps.holes_filled);
+  std::printf(
+      "| method | time [s] | vertices | min angle [deg] | tri >= 30 deg [%%] | mean Q | "
+      "irregular valence [%%] | Hausdorff [mm] | mean dist [mm] | self-intersections |\n"
+      "|---|---|---|---|---|---|---|---|---|---|\n");
   std::vector<Row> rows;
-  for (auto [name, gamma] : std::vector<std::pair<std::string, double>>{{"seed 001 regularize, uniform", 0.0},
-                                                                         {"seed 001 regularize, gamma 1", 1.0}}) {
+  for (auto [name, gamma] : std::vector<std::pair<std::string, double>>{
+           {"seed 001 regularize, uniform", 0.0}, {"seed 001 regularize, gamma 1", 1.0}}) {
     if (quick && gamma != 0) continue;
     remeshing::RemeshOptions o;
     o.target_vertices = target;
@@ -177,7 +183,9 @@ int main(int argc, char** argv) {
   }
   double area = 0;
   for (const auto& t : in.triangles)
-    area += 0.5 * (in.positions[t[1]] - in.positions[t[0]]).cross(in.positions[t[2]] - in.positions[t[0]]).norm();
+    area += 0.5 * (in.positions[t[1]] - in.positions[t[0]])
+                      .cross(in.positions[t[2]] - in.positions[t[0]])
+                      .norm();
   double L = std::sqrt(4 * area / (std::sqrt(3.0) * 2 * target));
   Mesh cgal_out;
   double cgal_t = 0;
@@ -194,20 +202,26 @@ int main(int argc, char** argv) {
     cgal_t = bench::now() - t0;
     cgal_out = from_cgal(sm);
     const double ratio = static_cast<double>(cgal_out.positions.size()) / target;
-    std::fprintf(stderr, "CGAL L = %.4f -> %zu vertices (%.1f s)\n", L, cgal_out.positions.size(), cgal_t);
+    std::fprintf(stderr, "CGAL L = %.4f -> %zu vertices (%.1f s)\n", L, cgal_out.positions.size(),
+                 cgal_t);
     if (std::abs(ratio - 1) < 0.01) break;
     L *= std::sqrt(ratio);
   }
-  rows.push_back(measure("CGAL isotropic_remeshing (L = " + std::to_string(L).substr(0, 5) + " mm)", cgal_t, cgal_out, in));
+  rows.push_back(measure("CGAL isotropic_remeshing (L = " + std::to_string(L).substr(0, 5) + " mm)",
+                         cgal_t, cgal_out, in));
   print(rows.back());
   std::printf("\ntime ratio seed 001 uniform / CGAL: %.2f\n\n", rows[0].seconds / cgal_t);
 
   // Non-manifold input: two boxes sharing a face.
   const Mesh boxes = test::two_boxes(10, 20);
-  SurfaceMesh sm;
-  std::printf("two boxes sharing a face (%zu triangles, 4 seam edges x 20 with 3 faces): CGAL "
-              "Surface_mesh %s\n",
-              boxes.triangles.size(), to_cgal(boxes, sm) ? "accepted it" : "cannot represent it (edges with 3 faces)");
+  std::vector<std::vector<std::size_t>> soup;
+  for (const auto& tr : boxes.triangles)
+    soup.push_back({std::size_t(tr[0]), std::size_t(tr[1]), std::size_t(tr[2])});
+  std::printf(
+      "two boxes sharing a face (%zu triangles, 4 seams x 20 edges with 3 faces): "
+      "is_polygon_soup_a_polygon_mesh = %s, so CGAL's Surface_mesh cannot hold it "
+      "(orient_polygon_soup would cut every seam edge apart into separate borders)\n",
+      boxes.triangles.size(), PMP::is_polygon_soup_a_polygon_mesh(soup) ? "true" : "false");
   remeshing::RemeshOptions o;
   o.target_vertices = 600;
   o.density.gamma = 0;
@@ -220,11 +234,11 @@ int main(int argc, char** argv) {
     for (int i = 0; i < 3; ++i) ++ec[remeshing::edge_key(tr[i], tr[(i + 1) % 3])];
   for (const auto& [k, c] : ec) seam_edges += c == 3;
   const auto q = remeshing::evaluate_remesh(boxes, r, true);
-  std::printf("seed 001: %.2f s, %zu vertices, %zu seam edges with 3 faces, min angle %.1f deg, "
-              "%.1f %% >= 30 deg, mean Q %.3f, irregular %.1f %% (2p+2 on seams), Hausdorff %.2g mm, "
-              "self-intersections %zu\n",
-              t, r.mesh.positions.size(), seam_edges, q.min_angle_deg,
-              100 * q.fraction_min_angle_ge_30, q.q_mean, 100 * q.fraction_irregular, q.hausdorff,
-              q.self_intersections);
+  std::printf(
+      "seed 001: %.2f s, %zu vertices, %zu seam edges with 3 faces, min angle %.1f deg, "
+      "%.1f %% >= 30 deg, mean Q %.3f, irregular %.1f %% (2p+2 on seams), Hausdorff %.2g mm, "
+      "self-intersections %zu\n",
+      t, r.mesh.positions.size(), seam_edges, q.min_angle_deg, 100 * q.fraction_min_angle_ge_30,
+      q.q_mean, 100 * q.fraction_irregular, q.hausdorff, q.self_intersections);
   return 0;
 }
