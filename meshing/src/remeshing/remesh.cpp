@@ -1017,7 +1017,17 @@ RemeshResult Remesher::run() {
   report("regularize", 0);
   if (o_.scheme == RemeshScheme::Regularize) {
     regularize();
-    skeleton_density_control();
+    // Skeleton sampling follows the regularised surroundings: (4.4)/(4.5) with valence flips
+    // until it settles, then the count is restored and regularised again.
+    for (int k = 0; k < 4; ++k) {
+      const std::size_t before = st_.skeleton_splits + st_.skeleton_collapses;
+      skeleton_density_control();
+      flip_pass(false);
+      for (int j = 0; j < 2; ++j) skeleton_relax_pass();
+      if (st_.skeleton_splits + st_.skeleton_collapses == before) break;
+    }
+    adjust_count();
+    regularize();
     adjust_count();
     flip_pass(false);
   } else {
