@@ -134,19 +134,8 @@ void print(const Row& r) {
               100 * r.irregular, r.hausdorff, r.mean_dist, r.self_intersections);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  int target = 20000;
-  bool quick = false;
-  for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--quick"))
-      quick = true;
-    else
-      target = std::atoi(argv[i]);
-  }
-  // The demo's head: simulate, clean, grid mesh; then the same clean-up for both remeshers.
-  const auto scan = sim::simulate_scan(sim::builtin_head_scene(), sim::builtin_head_scanner());
+void compare(const sim::ScannerConfig& cfg, int target, bool uniform_only) {
+  const auto scan = sim::simulate_scan(sim::builtin_head_scene(), cfg);
   RangeGrid grid = scan.grid;
   clean_grid(grid);
   const Mesh raw = grid_mesh(grid).mesh;
@@ -165,7 +154,7 @@ int main(int argc, char** argv) {
   std::vector<Row> rows;
   for (auto [name, gamma] : std::vector<std::pair<std::string, double>>{
            {"seed 001 regularize, uniform", 0.0}, {"seed 001 regularize, gamma 1", 1.0}}) {
-    if (quick && gamma != 0) continue;
+    if (uniform_only && gamma != 0) continue;
     remeshing::RemeshOptions o;
     o.target_vertices = target;
     o.density.gamma = gamma;
@@ -179,7 +168,7 @@ int main(int argc, char** argv) {
   SurfaceMesh base;
   if (!to_cgal(in, base)) {
     std::printf("CGAL: the prepared head is not a polygon mesh\n");
-    return 1;
+    return;
   }
   double area = 0;
   for (const auto& t : in.triangles)
@@ -211,6 +200,27 @@ int main(int argc, char** argv) {
                          cgal_t, cgal_out, in));
   print(rows.back());
   std::printf("\ntime ratio seed 001 uniform / CGAL: %.2f\n\n", rows[0].seconds / cgal_t);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int target = 20000;
+  bool quick = false;
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--quick"))
+      quick = true;
+    else
+      target = std::atoi(argv[i]);
+  }
+  // The demo's head (with its hair crumbs), and the same head scanned without hair.
+  for (const bool hair : {true, false}) {
+    if (quick && !hair) continue;
+    sim::ScannerConfig cfg = sim::builtin_head_scanner();
+    cfg.hair = hair;
+    std::printf("### %s\n\n", hair ? "demo head (hair on)" : "head scanned without hair");
+    compare(cfg, target, quick && hair);
+  }
 
   // Non-manifold input: two boxes sharing a face.
   const Mesh boxes = test::two_boxes(10, 20);
