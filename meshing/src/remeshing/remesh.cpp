@@ -6,11 +6,14 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <queue>
+#include <set>
 #include <unordered_map>
 
 #include "scanmesh/core/errors.h"
+#include "scanmesh/meshing/mesh_check.h"
 
 namespace scanmesh::remeshing {
 
@@ -152,6 +155,8 @@ class Remesher {
   void skeleton_density_control();
   void adjust_count();
   void regularize();
+  std::vector<int> intersecting_faces() const;
+  void repair_intersections();
   void report(const std::string& phase, double f) const {
     if (o_.progress) o_.progress(phase, f);
   }
@@ -937,6 +942,82 @@ void Remesher::regularize() {
   (void)changed;
 }
 
+std::vector<int> Remesher::intersecting_faces() const {
+  // Uniform grid over face boxes, cell = 2 x mean edge length.
+  std::vector<int> live;
+  double mean = 0;
+  Vec3 lo = Vec3::Constant(1e300), hi = -lo;
+  for (std::size_t f = 0; f < m_.tri.size(); ++f) {
+    if (!m_.face_alive[f]) continue;
+    live.push_back(static_cast<int>(f));
+    const auto& t = m_.tri[f];
+    mean += (m_.pos[t[0]] - m_.pos[t[1]]).norm();
+    for (int c : t) {
+      lo = lo.cwiseMin(m_.pos[c]);
+      hi = hi.cwiseMax(m_.pos[c]);
+    }
+  }
+  if (live.empty()) return {};
+  const double cell = std::max(2 * mean / static_cast<double>(live.size()), 1e-9);
+  auto key = [&](const Vec3& p) {
+    const Eigen::Array3d q = ((p - lo) / cell).array().floor();
+    return std::array<long long, 3>{static_cast<long long>(q[0]), static_cast<long long>(q[1]),
+                                    static_cast<long long>(q[2])};
+  };
+  std::map<std::array<long long, 3>, std::vector<int>> grid;
+  for (int f : live) {
+    const auto& t = m_.tri[f];
+    Vec3 a = m_.pos[t[0]], b = a;
+    for (int c : t) {
+      a = a.cwiseMin(m_.pos[c]);
+      b = b.cwiseMax(m_.pos[c]);
+    }
+    const auto ka = key(a), kb = key(b);
+    for (long long x = ka[0]; x <= kb[0]; ++x)
+      for (long long y = ka[1]; y <= kb[1]; ++y)
+        for (long long z = ka[2]; z <= kb[2]; ++z) grid[{x, y, z}].push_back(f);
+  }
+  std::vector<int> bad;
+  std::set<std::pair<int, int>> seen;
+  for (const auto& [k, fs] : grid)
+    for (std::size_t i = 0; i < fs.size(); ++i)
+      for (std::size_t j = i + 1; j < fs.size(); ++j) {
+        const int f = std::min(fs[i], fs[j]), g = std::max(fs[i], fs[j]);
+        if (!seen.insert({f, g}).second) continue;
+        if (triangles_intersect(m_.pos, m_.tri[f], m_.tri[g])) {
+          bad.push_back(f);
+          bad.push_back(g);
+        }
+      }
+  std::sort(bad.begin(), bad.end());
+  bad.erase(std::unique(bad.begin(), bad.end()), bad.end());
+  return bad;
+}
+
+void Remesher::repair_intersections() {
+  // Not in the thesis (it leaves global self-intersections open): faces that cut another face
+  // get Delaunay flips and their free corners pulled to the centroid of their star.
+  for (int round = 0; round < 4; ++round) {
+    const std::vector<int> bad = intersecting_faces();
+    if (bad.empty()) return;
+    for (int f : bad) {
+      if (!m_.face_alive[f]) continue;
+      const auto t = m_.tri[f];
+      for (int i = 0; i < 3; ++i)
+        if (m_.face_alive[f] && flip_improves_angle(t[i], t[(i + 1) % 3]))
+          flip(t[i], t[(i + 1) % 3]);
+      for (int c : t) {
+        if (!m_.vertex_alive[c] || vs_[c].kind != VertexKind::Free) continue;
+        Vec3 centroid = Vec3::Zero();
+        const auto nb = m_.neighbours(c);
+        for (int x : nb) centroid += m_.pos[x];
+        centroid /= static_cast<double>(nb.size());
+        move_to(c, 0.5 * (m_.pos[c] + centroid));
+      }
+    }
+  }
+}
+
 RemeshResult Remesher::run() {
   const auto t0 = std::chrono::steady_clock::now();
   if (m0_.face_count() == 0) throw InvalidInputError("remesh: the input mesh has no triangles");
@@ -1046,6 +1127,7 @@ RemeshResult Remesher::run() {
     relax_pass(o_.scheme == RemeshScheme::Regularize);
     skeleton_relax_pass();
   }
+  repair_intersections();
   st_.seconds_smooth = seconds_since(t1);
 
   RemeshResult r;
