@@ -155,3 +155,8 @@ void register_devices_commands(CLI::App& app, CommandList& commands);
 namespace scanmesh::cli {
 void register_aft_commands(CLI::App& app, CommandList& commands);
 }  // namespace scanmesh::cli
+
+// --- seed 001 adaptive remeshing: apps/src/cmd_remesh.cpp ---
+namespace scanmesh::cli {
+void register_remesh_commands(CLI::App& app, CommandList& commands);
+}  // namespace scanmesh::cli

@@ -188,6 +188,7 @@ int main(int argc, char** argv) {
   register_vision_commands(app, commands);
   register_devices_commands(app, commands);
   register_aft_commands(app, commands);
+  register_remesh_commands(app, commands);
 
   try {
     app.parse(argc, argv);

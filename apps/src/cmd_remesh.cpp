@@ -1,0 +1,141 @@
+// `scanmesh remesh`: seed 001 adaptive remeshing with feature skeleton (docs/remeshing.md).
+#include <CLI/CLI.hpp>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+
+#include "cli_support.h"
+#include "commands.h"
+#include "scanmesh/core/atomic_file.h"
+#include "scanmesh/core/image.h"
+#include "scanmesh/core/mesh_io.h"
+#include "scanmesh/meshing/remeshing/remesh.h"
+#include "scanmesh/meshing/remeshing/remesh_quality.h"
+
+namespace scanmesh::cli {
+
+namespace {
+
+struct RemeshArgs {
+  std::string mesh;
+  std::string out;
+  int vertices = 20000;
+  std::string features;  // file, "auto" or empty
+  double sharp_deg = 60.0;
+  double gamma = 3.0;
+  int filter = 10;
+  double clip = 4.0;
+  bool uniform = false;
+  std::string scheme = "regularize";
+  double theta_dist = 90.0, theta_glatt = 60.0;
+  bool no_intersections = false;
+  int min_component = 0, fill_holes = 0;
+};
+
+int run_remesh(const RemeshArgs& a) {
+  using namespace remeshing;
+  PrepareStats ps;
+  const Mesh input =
+      prepare_input(read_ply(a.mesh),
+                    {.min_component_faces = a.min_component, .max_hole_edges = a.fill_holes}, &ps);
+  if (a.min_component > 0 || a.fill_holes > 0)
+    std::cout << "prepare: removed " << ps.components_removed << " components (" << ps.faces_removed
+              << " faces), closed " << ps.holes_filled << " holes (" << ps.faces_added
+              << " faces)\n";
+  RemeshOptions o;
+  o.target_vertices = a.vertices;
+  o.scheme = parse_remesh_scheme(a.scheme);
+  o.density.gamma = a.uniform ? 0.0 : a.gamma;
+  o.density.n_filter = a.filter;
+  o.density.clip = a.clip;
+  o.theta_dist_deg = a.theta_dist;
+  o.theta_glatt_deg = a.theta_glatt;
+  if (a.features == "auto") {
+    o.skeleton.sharp_angle_deg = a.sharp_deg;
+  } else if (!a.features.empty()) {
+    o.features = read_feature_lines(a.features);
+  }
+  auto progress = std::make_shared<Progress>("remesh");
+  o.progress = [progress](const std::string&, double f) {
+    progress->update(static_cast<int>(f * 100), 100);
+  };
+  const RemeshResult r = remesh(input, o);
+  progress->finish();
+  std::filesystem::create_directories(a.out);
+  const std::filesystem::path dir(a.out);
+  write_ply(dir / "mesh.ply", r.mesh);
+  const RemeshQuality q = evaluate_remesh(input, r, !a.no_intersections);
+  const RemeshStats& s = r.stats;
+  std::ostringstream json;
+  json << "{\n\"input\": \"" << a.mesh << "\",\n\"target_vertices\": " << a.vertices
+       << ",\n\"scheme\": \"" << a.scheme << "\",\n\"gamma\": " << o.density.gamma
+       << ",\n\"n_filter\": " << a.filter
+       << ",\n\"stats\": {\"input_vertices\": " << s.input_vertices
+       << ", \"input_faces\": " << s.input_faces << ", \"output_vertices\": " << s.output_vertices
+       << ", \"output_faces\": " << s.output_faces
+       << ", \"skeleton_segments\": " << s.skeleton_segments
+       << ", \"branch_vertices\": " << s.branch_vertices << ", \"patches\": " << s.patches
+       << ", \"collapses\": " << s.collapses << ", \"splits\": " << s.splits
+       << ", \"flips\": " << s.flips << ", \"moves\": " << s.moves
+       << ", \"rejected_error\": " << s.rejected_error
+       << ", \"rejected_topology\": " << s.rejected_topology
+       << ", \"skeleton_splits\": " << s.skeleton_splits
+       << ", \"skeleton_collapses\": " << s.skeleton_collapses
+       << ", \"seconds_setup\": " << s.seconds_setup << ", \"seconds_adapt\": " << s.seconds_adapt
+       << ", \"seconds_count\": " << s.seconds_count
+       << ", \"seconds_regularize\": " << s.seconds_regularize
+       << ", \"seconds_smooth\": " << s.seconds_smooth << ", \"seconds_total\": " << s.seconds_total
+       << "},\n\"quality\": " << q.to_json() << "}\n";
+  write_file_atomically(dir / "report.json", json.str());
+  write_png(dir / "quality.png", render_quality(r));
+  write_png(dir / "histograms.png", quality_histograms(q));
+  std::cout << std::fixed << std::setprecision(3) << "remesh: " << s.input_vertices << " -> "
+            << s.output_vertices << " vertices, " << s.output_faces << " faces in "
+            << s.seconds_total << " s\n"
+            << "  skeleton: " << s.skeleton_segments << " segments, " << s.branch_vertices
+            << " branch vertices, " << s.patches << " patches\n"
+            << "  min angle " << q.min_angle_deg
+            << " deg, >= 30 deg: " << 100 * q.fraction_min_angle_ge_30 << " %, mean Q " << q.q_mean
+            << ", irregular valence " << 100 * q.fraction_irregular << " %\n"
+            << "  Hausdorff " << q.hausdorff << " mm (" << 100 * q.hausdorff / q.bbox_diagonal
+            << " % of the diagonal), mean distance " << q.mean_distance << " mm";
+  if (q.self_intersections_checked) std::cout << ", self-intersections " << q.self_intersections;
+  std::cout << "\nwrote " << a.out << "/{mesh.ply,report.json,quality.png,histograms.png}\n";
+  return kSuccess;
+}
+
+}  // namespace
+
+void register_remesh_commands(CLI::App& app, CommandList& commands) {
+  auto args = std::make_shared<RemeshArgs>();
+  auto* c = app.add_subcommand("remesh",
+                               "Seed 001 adaptive remeshing to a vertex count, keeping seams, "
+                               "boundaries and feature lines");
+  c->add_option("mesh", args->mesh, "Input mesh (.ply, face labels kept)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  c->add_option("--vertices", args->vertices, "Target vertex count")->required();
+  c->add_option("--features", args->features,
+                "Feature lines file (docs/formats.md) or 'auto' (sharp edges by dihedral angle)");
+  c->add_option("--sharp", args->sharp_deg,
+                "Dihedral angle (deg) of sharp edges for --features auto");
+  c->add_option("--gamma", args->gamma, "Density contrast gamma (0: uniform)");
+  c->add_option("--filter", args->filter, "n_filter smoothing passes of the density");
+  c->add_option("--clip", args->clip, "Max ratio of target edge length to its median");
+  c->add_flag("--uniform", args->uniform, "Uniform density (same as --gamma 0)");
+  c->add_option("--scheme", args->scheme, "regularize | lloyd")
+      ->check(CLI::IsMember({"regularize", "lloyd"}));
+  c->add_option("--theta-dist", args->theta_dist, "E_dist threshold (deg)");
+  c->add_option("--theta-glatt", args->theta_glatt, "E_glatt threshold (deg)");
+  c->add_flag("--no-intersections", args->no_intersections,
+              "Skip the self-intersection test of the report");
+  c->add_option("--min-component", args->min_component,
+                "Drop connected components with fewer faces before remeshing (0: keep all)");
+  c->add_option("--fill-holes", args->fill_holes,
+                "Close boundary loops with at most this many edges before remeshing (0: none)");
+  c->add_option("--out", args->out, "Output directory")->required();
+  commands.push_back({c, [args] { return run_remesh(*args); }});
+}
+
+}  // namespace scanmesh::cli

@@ -1,0 +1,70 @@
+// Non-manifold triangle mesh for remeshing (seed 001 §1.6): a plain triangle list with per-face
+// labels and redundant adjacency kept up to date by every local operation. An edge may carry any
+// number of faces; its radial edge-face list is edge_faces(v, w). Deleted faces and vertices stay
+// in the arrays (marked dead) until compact().
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "scanmesh/core/mesh.h"
+
+namespace scanmesh::remeshing {
+
+//! Order-independent key of the edge (v, w).
+inline std::uint64_t edge_key(int v, int w) {
+  const auto a = static_cast<std::uint64_t>(v < w ? v : w);
+  const auto b = static_cast<std::uint64_t>(v < w ? w : v);
+  return (a << 32) | b;
+}
+inline int edge_key_first(std::uint64_t k) { return static_cast<int>(k >> 32); }
+inline int edge_key_second(std::uint64_t k) { return static_cast<int>(k & 0xffffffffu); }
+
+class NmMesh {
+ public:
+  NmMesh() = default;
+  //! Copies positions, triangles and labels (label 0 when the mesh has none). Throws
+  //! InvalidInputError for bad indices or triangles with a repeated corner.
+  explicit NmMesh(const Mesh& mesh);
+
+  std::vector<Eigen::Vector3d> pos;
+  std::vector<std::array<int, 3>> tri;
+  std::vector<int> label;                //!< per face
+  std::vector<std::vector<int>> vfaces;  //!< per vertex: live incident faces
+  std::vector<char> face_alive, vertex_alive;
+
+  int vertex_count() const { return live_vertices_; }
+  int face_count() const { return live_faces_; }
+
+  int add_vertex(const Eigen::Vector3d& x);
+  int add_face(int a, int b, int c, int face_label);
+  void remove_face(int f);
+  //! Makes a removed face live again with its stored corners (undo of remove_face).
+  void revive_face(int f);
+  void remove_vertex(int v);  //!< the vertex must have no faces left
+  //! Replaces corner `from` of face f by `to` (adjacency updated).
+  void replace_corner(int f, int from, int to);
+
+  //! Radial edge-face list: every live face containing both v and w.
+  std::vector<int> edge_faces(int v, int w) const;
+  int edge_face_count(int v, int w) const;
+  //! Distinct neighbours of v (unsorted, deterministic order).
+  std::vector<int> neighbours(int v) const;
+  int valence(int v) const { return static_cast<int>(neighbours(v).size()); }
+  //! All distinct edges as keys, sorted.
+  std::vector<std::uint64_t> edges() const;
+  //! The corner of f that is neither v nor w.
+  int opposite(int f, int v, int w) const;
+  Eigen::Vector3d face_normal(int f) const;  //!< unit (zero for degenerate faces)
+  double face_area(int f) const;
+
+  //! Live parts only, labels kept; `old_to_new` receives the vertex map (-1 for dead).
+  Mesh to_mesh(std::vector<int>* old_to_new = nullptr) const;
+
+ private:
+  int live_vertices_ = 0, live_faces_ = 0;
+};
+
+}  // namespace scanmesh::remeshing

@@ -1,0 +1,53 @@
+// Quality report of a remeshing result (seed 001 §5.3): aspect ratio Q = R / (2r), min angle,
+// irregular valence (6 inside, 2p + 2 on a seam with p sides), symmetric sampled Hausdorff
+// distance to the input, label / seam checks; pictures (mesh coloured by Q with irregular
+// vertices marked, histograms). docs/remeshing.md, "Quality report".
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "scanmesh/core/image.h"
+#include "scanmesh/core/mesh.h"
+#include "scanmesh/meshing/remeshing/remesh.h"
+
+namespace scanmesh::remeshing {
+
+struct RemeshQuality {
+  std::size_t vertices = 0, faces = 0;
+  double min_angle_deg = 0, mean_min_angle_deg = 0, fraction_min_angle_ge_30 = 0;
+  double q_mean = 0, q_max = 0;                          //!< Q = R / (2 r), 1 = equilateral
+  std::array<std::size_t, 10> q_histogram{};             //!< bins [1,1.1), [1.1,1.2) ... [1.9, inf)
+  std::array<std::size_t, 12> angle_histogram{};         //!< min angle, 5 deg bins over [0, 60]
+  std::size_t valence_counted = 0, valence_optimal = 0;  //!< free + skeleton vertices
+  double fraction_irregular = 0;
+  double hausdorff_out_to_in = 0, hausdorff_in_to_out = 0, hausdorff = 0, mean_distance = 0;
+  double bbox_diagonal = 0;
+  bool self_intersections_checked = false;
+  std::size_t self_intersections = 0;
+  std::string to_json() const;
+};
+
+//! Q = R / (2 r) of one triangle (infinity when degenerate).
+double aspect_ratio(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c);
+
+//! One-sided sampled distance from `a` to `b`: vertices, edge midpoints and centroids of `a`
+//! projected exactly onto the triangles of `b` (uniform cell grid). Returns {max, mean}.
+std::array<double, 2> sampled_distance(const Mesh& a, const Mesh& b);
+
+//! Optimal valence of an output vertex (0 = undefined: branch vertex).
+int optimal_valence(VertexKind kind, int sides);
+
+RemeshQuality evaluate_remesh(const Mesh& input, const RemeshResult& result,
+                              bool check_self_intersections = true);
+
+//! Mesh coloured by Q (blue 1 -> red >= 2), irregular vertices marked (white: too many
+//! neighbours, black: too few), two views side by side.
+Image8 render_quality(const RemeshResult& result, int view_size = 560);
+//! Histograms of Q and of the min angle, side by side.
+Image8 quality_histograms(const RemeshQuality& q);
+
+}  // namespace scanmesh::remeshing

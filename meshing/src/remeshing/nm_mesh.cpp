@@ -1,0 +1,159 @@
+// Non-manifold triangle list with local adjacency updates (seed 001 §1.6).
+#include "scanmesh/meshing/remeshing/nm_mesh.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <string>
+
+#include "scanmesh/core/errors.h"
+
+namespace scanmesh::remeshing {
+
+NmMesh::NmMesh(const Mesh& mesh) {
+  const int n = static_cast<int>(mesh.positions.size());
+  pos = mesh.positions;
+  vfaces.assign(n, {});
+  vertex_alive.assign(n, 1);
+  live_vertices_ = n;
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    const auto& t = mesh.triangles[f];
+    for (int c : t)
+      if (c < 0 || c >= n)
+        throw InvalidInputError("remesh: triangle " + std::to_string(f) +
+                                " has a vertex index out of range");
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
+      throw InvalidInputError("remesh: triangle " + std::to_string(f) + " repeats a corner");
+    add_face(t[0], t[1], t[2], mesh.has_face_labels() ? mesh.face_labels[f] : 0);
+  }
+}
+
+int NmMesh::add_vertex(const Eigen::Vector3d& x) {
+  pos.push_back(x);
+  vfaces.emplace_back();
+  vertex_alive.push_back(1);
+  ++live_vertices_;
+  return static_cast<int>(pos.size()) - 1;
+}
+
+int NmMesh::add_face(int a, int b, int c, int face_label) {
+  tri.push_back({a, b, c});
+  label.push_back(face_label);
+  face_alive.push_back(1);
+  const int f = static_cast<int>(tri.size()) - 1;
+  vfaces[a].push_back(f);
+  vfaces[b].push_back(f);
+  vfaces[c].push_back(f);
+  ++live_faces_;
+  return f;
+}
+
+void NmMesh::remove_face(int f) {
+  if (!face_alive[f]) return;
+  for (int c : tri[f]) {
+    auto& l = vfaces[c];
+    l.erase(std::find(l.begin(), l.end(), f));
+  }
+  face_alive[f] = 0;
+  --live_faces_;
+}
+
+void NmMesh::revive_face(int f) {
+  if (face_alive[f]) return;
+  face_alive[f] = 1;
+  for (int c : tri[f]) vfaces[c].push_back(f);
+  ++live_faces_;
+}
+
+void NmMesh::remove_vertex(int v) {
+  if (!vertex_alive[v]) return;
+  vertex_alive[v] = 0;
+  vfaces[v].clear();
+  --live_vertices_;
+}
+
+void NmMesh::replace_corner(int f, int from, int to) {
+  for (int& c : tri[f])
+    if (c == from) {
+      c = to;
+      auto& l = vfaces[from];
+      l.erase(std::find(l.begin(), l.end(), f));
+      vfaces[to].push_back(f);
+      return;
+    }
+}
+
+std::vector<int> NmMesh::edge_faces(int v, int w) const {
+  std::vector<int> out;
+  for (int f : vfaces[v]) {
+    const auto& t = tri[f];
+    if (t[0] == w || t[1] == w || t[2] == w) out.push_back(f);
+  }
+  return out;
+}
+
+int NmMesh::edge_face_count(int v, int w) const {
+  int n = 0;
+  for (int f : vfaces[v]) {
+    const auto& t = tri[f];
+    n += (t[0] == w || t[1] == w || t[2] == w) ? 1 : 0;
+  }
+  return n;
+}
+
+std::vector<int> NmMesh::neighbours(int v) const {
+  std::vector<int> out;
+  out.reserve(8);
+  for (int f : vfaces[v])
+    for (int c : tri[f])
+      if (c != v && std::find(out.begin(), out.end(), c) == out.end()) out.push_back(c);
+  return out;
+}
+
+std::vector<std::uint64_t> NmMesh::edges() const {
+  std::vector<std::uint64_t> out;
+  for (std::size_t f = 0; f < tri.size(); ++f) {
+    if (!face_alive[f]) continue;
+    const auto& t = tri[f];
+    for (int i = 0; i < 3; ++i) out.push_back(edge_key(t[i], t[(i + 1) % 3]));
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+int NmMesh::opposite(int f, int v, int w) const {
+  for (int c : tri[f])
+    if (c != v && c != w) return c;
+  return -1;
+}
+
+Eigen::Vector3d NmMesh::face_normal(int f) const {
+  const auto& t = tri[f];
+  const Eigen::Vector3d n = (pos[t[1]] - pos[t[0]]).cross(pos[t[2]] - pos[t[0]]);
+  const double l = n.norm();
+  return l > 0 ? Eigen::Vector3d(n / l) : Eigen::Vector3d::Zero();
+}
+
+double NmMesh::face_area(int f) const {
+  const auto& t = tri[f];
+  return 0.5 * (pos[t[1]] - pos[t[0]]).cross(pos[t[2]] - pos[t[0]]).norm();
+}
+
+Mesh NmMesh::to_mesh(std::vector<int>* old_to_new) const {
+  Mesh m;
+  std::vector<int> map(pos.size(), -1);
+  for (std::size_t v = 0; v < pos.size(); ++v)
+    if (vertex_alive[v] && !vfaces[v].empty()) {
+      map[v] = static_cast<int>(m.positions.size());
+      m.positions.push_back(pos[v]);
+    }
+  for (std::size_t f = 0; f < tri.size(); ++f) {
+    if (!face_alive[f]) continue;
+    m.triangles.push_back({map[tri[f][0]], map[tri[f][1]], map[tri[f][2]]});
+    m.face_labels.push_back(label[f]);
+  }
+  if (old_to_new) *old_to_new = std::move(map);
+  return m;
+}
+
+}  // namespace scanmesh::remeshing

@@ -1,0 +1,1170 @@
+// Seed 001 remesher: link to the input, local operations with E_dist / E_glatt checks and undo,
+// skeleton rules and density control, the schemes. docs/remeshing.md.
+#include "scanmesh/meshing/remeshing/remesh.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <queue>
+#include <set>
+#include <unordered_map>
+
+#include "scanmesh/core/errors.h"
+#include "scanmesh/meshing/mesh_check.h"
+
+namespace scanmesh::remeshing {
+
+RemeshScheme parse_remesh_scheme(const std::string& name) {
+  if (name == "regularize") return RemeshScheme::Regularize;
+  if (name == "lloyd") return RemeshScheme::Lloyd;
+  throw InvalidInputError("unknown remesh scheme '" + name + "' (expected regularize or lloyd)");
+}
+
+std::string to_string(RemeshScheme s) {
+  return s == RemeshScheme::Regularize ? "regularize" : "lloyd";
+}
+
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Closest point on triangle (a, b, c) to p (Ericson, Real-Time Collision Detection 5.1.5);
+// returns the barycentric coordinates.
+Vec3 closest_barycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return {1, 0, 0};
+  const Vec3 bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return {0, 1, 0};
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+    const double v = d1 / (d1 - d3);
+    return {1 - v, v, 0};
+  }
+  const Vec3 cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return {0, 0, 1};
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+    const double w = d2 / (d2 - d6);
+    return {1 - w, 0, w};
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    return {0, 1 - w, w};
+  }
+  const double denom = 1.0 / (va + vb + vc);
+  const double v = vb * denom, w = vc * denom;
+  return {1 - v - w, v, w};
+}
+
+struct VState {
+  VertexKind kind = VertexKind::Free;
+  int seg = -1;        // skeleton: segment of the input skeleton
+  double s = 0;        // skeleton: arc length on the segment
+  int inp = -1;        // branch: input vertex
+  int iface = -1;      // free: input face of the projection
+  Vec3 bary{1, 0, 0};  // free: barycentric coordinates in iface
+  double sq = 1;       // sqrt(Psi) at the vertex
+};
+
+class Remesher {
+ public:
+  Remesher(const Mesh& input, const RemeshOptions& o) : o_(o), m0_(input) {}
+
+  RemeshResult run();
+
+ private:
+  // ---- setup ----
+  void build_input();
+  // ---- link to the input ----
+  Vec3 input_point(int f, const Vec3& b) const {
+    const auto& t = m0_.tri[f];
+    return b[0] * m0_.pos[t[0]] + b[1] * m0_.pos[t[1]] + b[2] * m0_.pos[t[2]];
+  }
+  // Walks over faces of the same patch toward the closest point to x (local minimum).
+  void project(const Vec3& x, int& face, Vec3& bary) const;
+  int input_face_on_patch_at_edge(int a, int b, int patch) const;
+  int input_face_on_patch_at_vertex(int u, int patch) const;
+  Vec3 corner_normal(int v, int patch) const;
+  double sq_of(const VState& st) const;
+  Vec3 position_of(const VState& st) const;
+  // Parameter of vertex x on segment seg, near `near_s` (a branch vertex may sit at either end).
+  double param_on(int x, int seg, double near_s) const;
+  int start_face(int v, int patch) const;
+
+  // ---- mesh helpers ----
+  int add_face(int a, int b, int c, int lab, int patch) {
+    const int f = m_.add_face(a, b, c, lab);
+    if (static_cast<int>(patch_.size()) <= f) patch_.resize(f + 1);
+    patch_[f] = patch;
+    return f;
+  }
+  int add_vertex(const VState& st) {
+    const int v = m_.add_vertex(position_of(st));
+    vs_.push_back(st);
+    vs_.back().sq = sq_of(st);
+    return v;
+  }
+  void set_state(int v, const VState& st) {
+    vs_[v] = st;
+    vs_[v].sq = sq_of(st);
+    m_.pos[v] = position_of(st);
+  }
+  bool is_skel(int v, int w) const { return sedge_.count(edge_key(v, w)) != 0; }
+  double target(int v, int w) const { return scale_ * 0.5 * (vs_[v].sq + vs_[w].sq); }
+  bool face_ok(int f) const;
+  bool faces_ok(const std::vector<int>& fs) const {
+    for (int f : fs)
+      if (!face_ok(f)) return false;
+    return true;
+  }
+  std::vector<int> fan(int v, int f) const;  // faces of v's side containing f
+  int side_valence(int v, int f) const { return static_cast<int>(fan(v, f).size()) - 1; }
+  int deviation(int v, int f) const;  // valence minus optimum (0 for branch)
+  bool ordered_ring(int v, std::vector<int>& ring) const;
+  Vec3 vertex_normal(int v) const;
+
+  // ---- operations (return true when applied) ----
+  bool collapse(int v, int w);  // removes v
+  int split(int v, int w);      // returns the new vertex or -1
+  bool flip(int v, int w, bool check = true);
+  int flip_delta(int v, int w) const;  // change of R (3.22) by flipping, 1000 if impossible
+  bool drive(int b, int w, int side);
+  std::array<int, 2> last_flip_{-1, -1};
+  bool move_to(int v, const Vec3& x);       // free vertex, 3D target (projected)
+  bool move_skeleton(int v, double s_new);  // skeleton vertex, 1D
+  bool flip_improves_valence(int v, int w) const;
+  bool flip_improves_angle(int v, int w) const;
+
+  // ---- phases ----
+  void split_long();
+  void collapse_short();
+  int flip_pass(bool delaunay);
+  void relax_pass(bool angle_based);
+  void skeleton_relax_pass();
+  void skeleton_density_control();
+  void adjust_count();
+  void regularize();
+  std::vector<int> intersecting_faces() const;
+  void repair_intersections();
+  void report(const std::string& phase, double f) const {
+    if (o_.progress) o_.progress(phase, f);
+  }
+
+  RemeshOptions o_;
+  NmMesh m0_;
+  FeatureSkeleton sk_;
+  std::vector<double> psi0_, sq0_;
+  std::vector<std::array<Vec3, 3>> cn_;  // per input face: per-patch corner normals
+  std::vector<Vec3> fn0_;
+  NmMesh m_;
+  std::vector<VState> vs_;
+  std::vector<int> patch_;
+  std::unordered_map<std::uint64_t, int> sedge_;  // skeleton edges of M -> segment
+  std::vector<int> seg_edges_;                    // M edges per segment
+  double scale_ = 1;
+  double cos_dist_ = 0, cos_glatt_ = 0;
+  RemeshStats st_;
+};
+
+void Remesher::build_input() {
+  SkeletonOptions so = o_.skeleton;
+  if (so.kink_reach_mm <= 0) {
+    // Mean edge length of a uniform mesh with the requested vertex count: F ~ 2 V faces of
+    // area sqrt(3)/4 h^2.
+    double area = 0;
+    for (std::size_t f = 0; f < m0_.tri.size(); ++f)
+      if (m0_.face_alive[f]) area += m0_.face_area(static_cast<int>(f));
+    so.kink_reach_mm = std::sqrt(area / (std::sqrt(3.0) / 2 * o_.target_vertices));
+  }
+  sk_ = build_feature_skeleton(m0_, o_.features, so);
+  psi0_ = compute_density(m0_, o_.density);
+  sq0_.resize(psi0_.size());
+  for (std::size_t i = 0; i < psi0_.size(); ++i) sq0_[i] = std::sqrt(psi0_[i]);
+  const int nf = static_cast<int>(m0_.tri.size());
+  fn0_.resize(nf);
+  for (int f = 0; f < nf; ++f) fn0_[f] = m0_.face_normal(f);
+  // Angle-weighted vertex normals per (vertex, patch): a skeleton vertex has one per side.
+  cn_.assign(nf, {Vec3::Zero(), Vec3::Zero(), Vec3::Zero()});
+  for (int v = 0; v < static_cast<int>(m0_.pos.size()); ++v) {
+    const auto& fs = m0_.vfaces[v];
+    std::vector<std::pair<int, Vec3>> acc;
+    for (int f : fs) {
+      const auto& t = m0_.tri[f];
+      const int i = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
+      const Vec3 e1 = (m0_.pos[t[(i + 1) % 3]] - m0_.pos[v]).normalized();
+      const Vec3 e2 = (m0_.pos[t[(i + 2) % 3]] - m0_.pos[v]).normalized();
+      const double ang = std::acos(std::clamp(e1.dot(e2), -1.0, 1.0));
+      const int p = sk_.face_patch[f];
+      auto it = std::find_if(acc.begin(), acc.end(), [&](const auto& a) { return a.first == p; });
+      if (it == acc.end())
+        acc.push_back({p, ang * fn0_[f]});
+      else
+        it->second += ang * fn0_[f];
+    }
+    for (int f : fs) {
+      const auto& t = m0_.tri[f];
+      const int i = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
+      const int p = sk_.face_patch[f];
+      for (const auto& a : acc)
+        if (a.first == p) cn_[f][i] = a.second.norm() > 0 ? Vec3(a.second.normalized()) : fn0_[f];
+    }
+  }
+}
+
+void Remesher::project(const Vec3& x, int& face, Vec3& bary) const {
+  const int patch = sk_.face_patch[face];
+  auto eval = [&](int f, Vec3& b) {
+    const auto& t = m0_.tri[f];
+    b = closest_barycentric(x, m0_.pos[t[0]], m0_.pos[t[1]], m0_.pos[t[2]]);
+    return (input_point(f, b) - x).squaredNorm();
+  };
+  Vec3 b;
+  double best = eval(face, b);
+  bary = b;
+  for (int step = 0; step < 10000; ++step) {
+    int next = -1;
+    Vec3 nb;
+    for (int c : m0_.tri[face])
+      for (int g : m0_.vfaces[c]) {
+        if (g == face || sk_.face_patch[g] != patch) continue;
+        const double d = eval(g, b);
+        if (d < best * (1 - 1e-12) - 1e-18) {
+          best = d;
+          next = g;
+          nb = b;
+        }
+      }
+    if (next < 0) return;
+    face = next;
+    bary = nb;
+  }
+}
+
+int Remesher::input_face_on_patch_at_edge(int a, int b, int patch) const {
+  for (int f : m0_.vfaces[a]) {
+    const auto& t = m0_.tri[f];
+    if ((t[0] == b || t[1] == b || t[2] == b) && sk_.face_patch[f] == patch) return f;
+  }
+  return -1;
+}
+
+int Remesher::input_face_on_patch_at_vertex(int u, int patch) const {
+  for (int f : m0_.vfaces[u])
+    if (sk_.face_patch[f] == patch) return f;
+  return -1;
+}
+
+Vec3 Remesher::corner_normal(int v, int patch) const {
+  const VState& st = vs_[v];
+  auto at = [&](int f, int u) {
+    const auto& t = m0_.tri[f];
+    return cn_[f][t[0] == u ? 0 : (t[1] == u ? 1 : 2)];
+  };
+  if (st.kind == VertexKind::Free) {
+    const auto& c = cn_[st.iface];
+    return (st.bary[0] * c[0] + st.bary[1] * c[1] + st.bary[2] * c[2]).normalized();
+  }
+  if (st.kind == VertexKind::Branch) {
+    const int f = input_face_on_patch_at_vertex(st.inp, patch);
+    return f >= 0 ? at(f, st.inp) : Vec3::Zero();
+  }
+  int e = 0;
+  double t = 0;
+  sk_.point(m0_.pos, st.seg, st.s, &e, &t);
+  const auto& sg = sk_.segments[st.seg];
+  const int a = sg.vertices[e], b = sg.vertices[e + 1];
+  const int f = input_face_on_patch_at_edge(a, b, patch);
+  if (f < 0) return Vec3::Zero();
+  return ((1 - t) * at(f, a) + t * at(f, b)).normalized();
+}
+
+double Remesher::sq_of(const VState& st) const {
+  if (st.kind == VertexKind::Free) {
+    const auto& t = m0_.tri[st.iface];
+    return st.bary[0] * sq0_[t[0]] + st.bary[1] * sq0_[t[1]] + st.bary[2] * sq0_[t[2]];
+  }
+  if (st.kind == VertexKind::Branch) return sq0_[st.inp];
+  int e = 0;
+  double t = 0;
+  sk_.point(m0_.pos, st.seg, st.s, &e, &t);
+  const auto& sg = sk_.segments[st.seg];
+  return (1 - t) * sq0_[sg.vertices[e]] + t * sq0_[sg.vertices[e + 1]];
+}
+
+Vec3 Remesher::position_of(const VState& st) const {
+  if (st.kind == VertexKind::Free) return input_point(st.iface, st.bary);
+  if (st.kind == VertexKind::Branch) return m0_.pos[st.inp];
+  return sk_.point(m0_.pos, st.seg, st.s);
+}
+
+double Remesher::param_on(int x, int seg, double near_s) const {
+  const VState& st = vs_[x];
+  if (st.kind == VertexKind::Skeleton) return st.s;
+  const auto& sg = sk_.segments[seg];
+  const bool at_start = sg.vertices.front() == st.inp, at_end = sg.vertices.back() == st.inp;
+  if (at_start && at_end) return near_s < 0.5 * sg.length() ? 0.0 : sg.length();
+  return at_start ? 0.0 : sg.length();
+}
+
+int Remesher::start_face(int v, int patch) const {
+  const VState& st = vs_[v];
+  if (st.kind == VertexKind::Free) return st.iface;
+  if (st.kind == VertexKind::Branch) return input_face_on_patch_at_vertex(st.inp, patch);
+  int e = 0;
+  sk_.point(m0_.pos, st.seg, st.s, &e);
+  const auto& sg = sk_.segments[st.seg];
+  return input_face_on_patch_at_edge(sg.vertices[e], sg.vertices[e + 1], patch);
+}
+
+bool Remesher::face_ok(int f) const {
+  const auto& t = m_.tri[f];
+  const Vec3 n = (m_.pos[t[1]] - m_.pos[t[0]]).cross(m_.pos[t[2]] - m_.pos[t[0]]);
+  const double len = n.norm();
+  const double l2 = (m_.pos[t[1]] - m_.pos[t[0]]).squaredNorm() +
+                    (m_.pos[t[2]] - m_.pos[t[1]]).squaredNorm() +
+                    (m_.pos[t[0]] - m_.pos[t[2]]).squaredNorm();
+  if (!(len > 1e-6 * l2)) return false;  // degenerate (sliver with min angle < ~1e-4 rad)
+  const Vec3 nf = n / len;
+  Vec3 cn[3];
+  for (int i = 0; i < 3; ++i) {
+    cn[i] = corner_normal(t[i], patch_[f]);
+    if (nf.dot(cn[i]) <= cos_glatt_) return false;  // E_glatt (3.5)
+  }
+  for (int i = 0; i < 3; ++i)
+    if (cn[i].dot(cn[(i + 1) % 3]) <= cos_dist_) return false;  // E_dist (3.4)
+  return true;
+}
+
+std::vector<int> Remesher::fan(int v, int f0) const {
+  std::vector<int> out = {f0};
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    const auto& t = m_.tri[out[i]];
+    for (int c : t) {
+      if (c == v || is_skel(v, c)) continue;
+      for (int g : m_.vfaces[v]) {
+        if (std::find(out.begin(), out.end(), g) != out.end()) continue;
+        const auto& u = m_.tri[g];
+        if (u[0] == c || u[1] == c || u[2] == c) out.push_back(g);
+      }
+    }
+  }
+  return out;
+}
+
+int Remesher::deviation(int v, int f) const {
+  switch (vs_[v].kind) {
+    case VertexKind::Free:
+      return m_.valence(v) - 6;
+    case VertexKind::Skeleton:
+      return side_valence(v, f) - 2;  // d^_p - 2, i.e. (2 d^_p + 2 - 6) / 2 (4.3)
+    default:
+      return 0;
+  }
+}
+
+bool Remesher::ordered_ring(int v, std::vector<int>& ring) const {
+  ring.clear();
+  const auto& fs = m_.vfaces[v];
+  if (fs.size() < 3) return false;
+  // next[a] = b for each face (v, a, b) in counter-clockwise order.
+  std::vector<std::pair<int, int>> nx;
+  for (int f : fs) {
+    const auto& t = m_.tri[f];
+    const int i = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
+    nx.push_back({t[(i + 1) % 3], t[(i + 2) % 3]});
+  }
+  int cur = nx[0].first;
+  for (std::size_t k = 0; k < nx.size(); ++k) {
+    ring.push_back(cur);
+    auto it = std::find_if(nx.begin(), nx.end(), [&](const auto& p) { return p.first == cur; });
+    if (it == nx.end()) return false;
+    cur = it->second;
+  }
+  return cur == ring[0];
+}
+
+Vec3 Remesher::vertex_normal(int v) const {
+  Vec3 n = Vec3::Zero();
+  for (int f : m_.vfaces[v]) {
+    const auto& t = m_.tri[f];
+    n += (m_.pos[t[1]] - m_.pos[t[0]]).cross(m_.pos[t[2]] - m_.pos[t[0]]);
+  }
+  return n.norm() > 0 ? Vec3(n.normalized()) : Vec3::Zero();
+}
+
+// ---------------------------------------------------------------- operations
+
+bool Remesher::collapse(int v, int w) {
+  const VState& sv = vs_[v];
+  if (sv.kind == VertexKind::Branch) return ++st_.rejected_topology, false;
+  const bool skel = is_skel(v, w);
+  int seg = -1;
+  if (skel) {
+    seg = sedge_.at(edge_key(v, w));
+    if (sv.kind != VertexKind::Skeleton || sv.seg != seg) return ++st_.rejected_topology, false;
+    const auto& sg = sk_.segments[seg];
+    const bool loop = sg.vertices.front() == sg.vertices.back();
+    if (seg_edges_[seg] <= (loop ? 3 : 1)) return ++st_.rejected_topology, false;
+  } else if (sv.kind != VertexKind::Free) {
+    return ++st_.rejected_topology, false;
+  }
+  const std::vector<int> ef = m_.edge_faces(v, w);
+  if (ef.empty()) return false;
+  // Generalised link condition: common neighbours are exactly the opposite corners of Star(e).
+  std::vector<int> opp;
+  for (int f : ef) opp.push_back(m_.opposite(f, v, w));
+  const auto nv = m_.neighbours(v), nw = m_.neighbours(w);
+  for (int x : nv) {
+    if (x == w) continue;
+    if (std::find(nw.begin(), nw.end(), x) != nw.end() &&
+        std::find(opp.begin(), opp.end(), x) == opp.end())
+      return ++st_.rejected_topology, false;
+  }
+  for (int a : opp)
+    if (vs_[a].kind == VertexKind::Free && m_.valence(a) <= 3)
+      return ++st_.rejected_topology, false;
+  if (vs_[w].kind == VertexKind::Free && nv.size() + nw.size() < 8)
+    return ++st_.rejected_topology, false;
+  // New state of w: midpoint between two free or two skeleton vertices, else w stays.
+  const VState old_w = vs_[w];
+  VState nw_state = old_w;
+  if (sv.kind == VertexKind::Free && old_w.kind == VertexKind::Free) {
+    project(0.5 * (m_.pos[v] + m_.pos[w]), nw_state.iface, nw_state.bary);
+  } else if (skel && old_w.kind == VertexKind::Skeleton) {
+    nw_state.s = 0.5 * (sv.s + old_w.s);
+  }
+  // Apply.
+  const std::vector<int> vf = m_.vfaces[v];
+  for (int f : ef) m_.remove_face(f);
+  std::vector<int> moved;
+  for (int f : vf)
+    if (m_.face_alive[f]) {
+      m_.replace_corner(f, v, w);
+      moved.push_back(f);
+    }
+  const Vec3 old_pos_v = m_.pos[v];
+  set_state(w, nw_state);
+  if (!faces_ok(m_.vfaces[w])) {
+    for (int f : moved) m_.replace_corner(f, w, v);
+    for (int f : ef) m_.revive_face(f);
+    set_state(w, old_w);
+    m_.pos[v] = old_pos_v;
+    ++st_.rejected_error;
+    return false;
+  }
+  // Skeleton bookkeeping.
+  if (skel) {
+    sedge_.erase(edge_key(v, w));
+    for (int x : nv)
+      if (x != w) {
+        auto it = sedge_.find(edge_key(v, x));
+        if (it != sedge_.end()) {
+          sedge_.erase(it);
+          sedge_[edge_key(w, x)] = seg;
+        }
+      }
+    --seg_edges_[seg];
+  }
+  m_.remove_vertex(v);
+  ++st_.collapses;
+  return true;
+}
+
+int Remesher::split(int v, int w) {
+  const std::vector<int> ef = m_.edge_faces(v, w);
+  if (ef.empty()) return -1;
+  const bool skel = is_skel(v, w);
+  VState su;
+  if (skel) {
+    const int seg = sedge_.at(edge_key(v, w));
+    su.kind = VertexKind::Skeleton;
+    su.seg = seg;
+    const double sv = vs_[v].kind == VertexKind::Skeleton ? vs_[v].s : -1;
+    const double sw = vs_[w].kind == VertexKind::Skeleton ? vs_[w].s : -1;
+    const double a = param_on(v, seg, sw >= 0 ? sw : sv);
+    const double b = param_on(w, seg, sv >= 0 ? sv : sw);
+    su.s = 0.5 * (a + b);
+  } else {
+    su.iface = start_face(v, patch_[ef[0]]);
+    if (su.iface < 0) return -1;
+    project(0.5 * (m_.pos[v] + m_.pos[w]), su.iface, su.bary);
+  }
+  const int u = add_vertex(su);
+  std::vector<int> changed, added;
+  for (int f : ef) {
+    const auto t = m_.tri[f];
+    std::array<int, 3> t2 = t;
+    for (int& c : t2)
+      if (c == v) c = u;
+    m_.replace_corner(f, w, u);
+    added.push_back(add_face(t2[0], t2[1], t2[2], m_.label[f], patch_[f]));
+    changed.push_back(f);
+  }
+  std::vector<int> check = changed;
+  check.insert(check.end(), added.begin(), added.end());
+  if (!faces_ok(check)) {
+    for (int f : added) m_.remove_face(f);
+    for (int f : changed) m_.replace_corner(f, u, w);
+    m_.remove_vertex(u);
+    ++st_.rejected_error;
+    return -1;
+  }
+  if (skel) {
+    const int seg = sedge_.at(edge_key(v, w));
+    sedge_.erase(edge_key(v, w));
+    sedge_[edge_key(v, u)] = seg;
+    sedge_[edge_key(u, w)] = seg;
+    ++seg_edges_[seg];
+  }
+  ++st_.splits;
+  return u;
+}
+
+bool Remesher::flip(int v, int w, bool check) {
+  if (is_skel(v, w)) return false;
+  const std::vector<int> ef = m_.edge_faces(v, w);
+  if (ef.size() != 2) return false;
+  int f1 = ef[0], f2 = ef[1];
+  // Orient: f1 = (v, w, a) counter-clockwise.
+  {
+    const auto& t = m_.tri[f1];
+    const int i = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
+    if (t[(i + 1) % 3] != w) std::swap(f1, f2);
+  }
+  const int a = m_.opposite(f1, v, w), b = m_.opposite(f2, v, w);
+  if (a == b || m_.edge_face_count(a, b) > 0) return false;
+  m_.replace_corner(f1, w, b);  // (v, b, a)
+  m_.replace_corner(f2, v, a);  // (w, a, b)
+  last_flip_ = {a, b};
+  if (check && (!face_ok(f1) || !face_ok(f2))) {
+    m_.replace_corner(f1, b, w);
+    m_.replace_corner(f2, a, v);
+    ++st_.rejected_error;
+    return false;
+  }
+  ++st_.flips;
+  return true;
+}
+
+bool Remesher::move_to(int v, const Vec3& x) {
+  VState ns = vs_[v];
+  project(x, ns.iface, ns.bary);
+  const VState old = vs_[v];
+  const Vec3 old_pos = m_.pos[v];
+  set_state(v, ns);
+  if (!faces_ok(m_.vfaces[v])) {
+    vs_[v] = old;
+    m_.pos[v] = old_pos;
+    ++st_.rejected_error;
+    return false;
+  }
+  ++st_.moves;
+  return true;
+}
+
+bool Remesher::move_skeleton(int v, double s_new) {
+  const VState old = vs_[v];
+  const Vec3 old_pos = m_.pos[v];
+  VState ns = old;
+  ns.s = s_new;
+  set_state(v, ns);
+  if (!faces_ok(m_.vfaces[v])) {
+    vs_[v] = old;
+    m_.pos[v] = old_pos;
+    ++st_.rejected_error;
+    return false;
+  }
+  ++st_.moves;
+  return true;
+}
+
+bool Remesher::flip_improves_valence(int v, int w) const { return flip_delta(v, w) < 0; }
+
+int Remesher::flip_delta(int v, int w) const {
+  if (is_skel(v, w)) return 1000;
+  const std::vector<int> ef = m_.edge_faces(v, w);
+  if (ef.size() != 2) return 1000;
+  const int a = m_.opposite(ef[0], v, w), b = m_.opposite(ef[1], v, w);
+  if (a == b || m_.edge_face_count(a, b) > 0) return 1000;
+  const int dv = deviation(v, ef[0]), dw = deviation(w, ef[0]);
+  const int da = deviation(a, ef[0]), db = deviation(b, ef[1]);
+  // (4.3)-weighted: a skeleton vertex's per-side deviation counts double (d_p = 2 d^_p + 2).
+  auto wgt = [&](int x) { return vs_[x].kind == VertexKind::Skeleton ? 2 : 1; };
+  auto term = [&](int x, int d, int change) {
+    const int k = wgt(x);
+    const int before = k * d, after = k * (d + change);
+    return after * after - before * before;
+  };
+  return term(v, dv, -1) + term(w, dw, -1) + term(a, da, 1) + term(b, db, 1);
+}
+
+bool Remesher::drive(int b, int w, int side) {
+  // §3.8 drive edge (b black, w white): flip the edge (w, x) of a triangle (b, w, x); the pair
+  // reappears on the far side of that quad. Moved at most drive_limit steps; kept only if R
+  // dropped on the way (a simple edge appeared and was flipped), otherwise undone.
+  std::vector<std::array<int, 2>> log;
+  int total = 0;
+  for (int step = 0; step < o_.drive_limit; ++step) {
+    const auto ef = m_.edge_faces(b, w);
+    if (ef.size() != 2 || is_skel(b, w)) break;
+    // The side whose quad moves the pair away from where it came from: smallest index first.
+    int x = m_.opposite(ef[side], b, w);
+    const int d = flip_delta(w, x);
+    if (d >= 1000) break;
+    const auto fx = m_.edge_faces(w, x);
+    const int y =
+        m_.opposite(fx[0], w, x) == b ? m_.opposite(fx[1], w, x) : m_.opposite(fx[0], w, x);
+    if (!flip(w, x)) break;
+    log.push_back(last_flip_);
+    total += d;
+    // Simple edges around the moved pair.
+    for (int c : {x, y})
+      for (int z : m_.neighbours(c)) {
+        const int dz = flip_delta(c, z);
+        if (dz < 0 && flip(c, z)) {
+          log.push_back(last_flip_);
+          total += dz;
+        }
+      }
+    if (total < 0) return true;
+    if (!(deviation(x, m_.vfaces[x][0]) < 0 && deviation(y, m_.vfaces[y][0]) > 0)) break;
+    if (m_.edge_face_count(x, y) == 0) break;
+    b = x;
+    w = y;
+  }
+  if (total < 0) return true;
+  for (auto it = log.rbegin(); it != log.rend(); ++it) flip((*it)[0], (*it)[1], false);
+  st_.flips -= 2 * log.size();
+  return false;
+}
+
+bool Remesher::flip_improves_angle(int v, int w) const {
+  if (is_skel(v, w)) return false;
+  const std::vector<int> ef = m_.edge_faces(v, w);
+  if (ef.size() != 2) return false;
+  const int a = m_.opposite(ef[0], v, w), b = m_.opposite(ef[1], v, w);
+  if (a == b) return false;
+  auto angle = [&](int p, int q, int r) {  // at p
+    const Vec3 e1 = (m_.pos[q] - m_.pos[p]).normalized(), e2 = (m_.pos[r] - m_.pos[p]).normalized();
+    return std::acos(std::clamp(e1.dot(e2), -1.0, 1.0));
+  };
+  auto min_angle = [&](int p, int q, int r) {
+    return std::min({angle(p, q, r), angle(q, r, p), angle(r, p, q)});
+  };
+  const double before = std::min(min_angle(v, w, a), min_angle(v, w, b));
+  const double after = std::min(min_angle(a, b, v), min_angle(a, b, w));
+  return after > before + 1e-9;
+}
+
+// ---------------------------------------------------------------- phases
+
+void Remesher::split_long() {
+  const auto es = m_.edges();
+  std::vector<std::pair<double, std::uint64_t>> cand;
+  for (auto k : es) {
+    const int v = edge_key_first(k), w = edge_key_second(k);
+    const double r = (m_.pos[v] - m_.pos[w]).norm() / target(v, w);
+    if (r > 4.0 / 3.0) cand.push_back({-r, k});
+  }
+  std::sort(cand.begin(), cand.end());
+  for (const auto& [r, k] : cand) {
+    const int v = edge_key_first(k), w = edge_key_second(k);
+    if (!m_.vertex_alive[v] || !m_.vertex_alive[w] || m_.edge_face_count(v, w) == 0) continue;
+    split(v, w);
+  }
+}
+
+void Remesher::collapse_short() {
+  for (int pass = 0; pass < 20; ++pass) {
+    const auto es = m_.edges();
+    std::vector<std::pair<double, std::uint64_t>> cand;
+    for (auto k : es) {
+      const int v = edge_key_first(k), w = edge_key_second(k);
+      const double r = (m_.pos[v] - m_.pos[w]).norm() / target(v, w);
+      if (r < 0.8) cand.push_back({r, k});
+    }
+    if (cand.empty()) return;
+    std::sort(cand.begin(), cand.end());
+    std::size_t done = 0;
+    for (const auto& [r, k] : cand) {
+      int v = edge_key_first(k), w = edge_key_second(k);
+      if (!m_.vertex_alive[v] || !m_.vertex_alive[w] || m_.edge_face_count(v, w) == 0) continue;
+      if ((m_.pos[v] - m_.pos[w]).norm() >= 0.8 * target(v, w)) continue;
+      // Remove the less constrained end; do not create edges longer than 4/3 h.
+      if (vs_[v].kind != VertexKind::Free && vs_[w].kind == VertexKind::Free) std::swap(v, w);
+      if (vs_[v].kind == VertexKind::Skeleton && vs_[w].kind == VertexKind::Branch) {
+      } else if (vs_[v].kind == VertexKind::Branch) {
+        std::swap(v, w);
+      }
+      bool too_long = false;
+      const Vec3 mid =
+          (vs_[v].kind == vs_[w].kind) ? Vec3(0.5 * (m_.pos[v] + m_.pos[w])) : m_.pos[w];
+      for (int x : m_.neighbours(v))
+        if ((m_.pos[x] - mid).norm() > 4.0 / 3.0 * target(x, w)) too_long = true;
+      if (too_long) continue;
+      if (collapse(v, w) || collapse(w, v)) ++done;
+    }
+    if (done == 0) return;
+  }
+}
+
+int Remesher::flip_pass(bool delaunay) {
+  int total = 0;
+  for (int pass = 0; pass < 10; ++pass) {
+    int n = 0;
+    for (auto k : m_.edges()) {
+      const int v = edge_key_first(k), w = edge_key_second(k);
+      if (m_.edge_face_count(v, w) != 2) continue;
+      const bool want = delaunay ? flip_improves_angle(v, w) : flip_improves_valence(v, w);
+      if (want && flip(v, w)) ++n;
+    }
+    total += n;
+    if (n == 0) break;
+  }
+  return total;
+}
+
+void Remesher::relax_pass(bool angle_based) {
+  std::vector<int> ring;
+  const int n = static_cast<int>(m_.pos.size());
+  for (int v = 0; v < n; ++v) {
+    if (!m_.vertex_alive[v] || vs_[v].kind != VertexKind::Free) continue;
+    if (!ordered_ring(v, ring)) continue;
+    const Vec3 p = m_.pos[v];
+    const Vec3 nrm = vertex_normal(v);
+    if (nrm.isZero()) continue;
+    const std::size_t k = ring.size();
+    Vec3 target_pt = Vec3::Zero();
+    if (angle_based) {
+      // Zhou-Shimada (3.14)-(3.18) in the tangent plane: rotate (p - p_i) onto the bisector of
+      // the corner angle at p_i, weight 1 / alpha_i^2.
+      double wsum = 0;
+      for (std::size_t i = 0; i < k; ++i) {
+        const Vec3 pi = m_.pos[ring[i]];
+        auto tang = [&](const Vec3& d) { return Vec3(d - d.dot(nrm) * nrm); };
+        const Vec3 a = tang(m_.pos[ring[(i + 1) % k]] - pi).normalized();
+        const Vec3 b = tang(m_.pos[ring[(i + k - 1) % k]] - pi).normalized();
+        const Vec3 e = tang(p - pi);
+        const double len = e.norm();
+        if (len == 0) continue;
+        const Vec3 en = e / len;
+        const double aa = std::acos(std::clamp(en.dot(a), -1.0, 1.0));
+        const double ab = std::acos(std::clamp(en.dot(b), -1.0, 1.0));
+        const double alpha = aa + ab;
+        Vec3 bis = a + b;
+        if (bis.norm() < 1e-9) bis = en;
+        bis.normalize();
+        if (bis.dot(en) < 0) bis = -bis;
+        const double wgt = 1.0 / std::max(alpha * alpha, 1e-6);
+        target_pt += wgt * (pi + len * bis);
+        wsum += wgt;
+      }
+      if (wsum == 0) continue;
+      target_pt /= wsum;
+    } else {
+      // Density-weighted centroid of the star (area x Psi^-1 per face): the area-equalising /
+      // centroidal move of §3.4 / §3.6 in the tangent plane.
+      double wsum = 0;
+      for (std::size_t i = 0; i < k; ++i) {
+        const int a = ring[i], b = ring[(i + 1) % k];
+        const Vec3 c = (p + m_.pos[a] + m_.pos[b]) / 3.0;
+        const double area = 0.5 * (m_.pos[a] - p).cross(m_.pos[b] - p).norm();
+        const double s = (vs_[v].sq + vs_[a].sq + vs_[b].sq) / 3.0;
+        const double wgt = area / (s * s);
+        target_pt += wgt * c;
+        wsum += wgt;
+      }
+      if (wsum == 0) continue;
+      target_pt /= wsum;
+    }
+    Vec3 d = target_pt - p;
+    d -= d.dot(nrm) * nrm;
+    move_to(v, p + d);
+  }
+}
+
+void Remesher::skeleton_relax_pass() {
+  // 1D moves (§4.2): p_new between the two skeleton neighbours, split in the ratio of the target
+  // lengths sqrt(Psi) (the area rule of §4.2 stated for lengths).
+  const int n = static_cast<int>(m_.pos.size());
+  for (int v = 0; v < n; ++v) {
+    if (!m_.vertex_alive[v] || vs_[v].kind != VertexKind::Skeleton) continue;
+    int a = -1, b = -1;
+    for (int x : m_.neighbours(v))
+      if (is_skel(v, x)) (a < 0 ? a : b) = x;
+    if (a < 0 || b < 0) continue;
+    const int seg = vs_[v].seg;
+    const double s = vs_[v].s;
+    double sa = param_on(a, seg, s), sb = param_on(b, seg, s);
+    if (sa > sb) std::swap(sa, sb), std::swap(a, b);
+    if (!(sa < s && s < sb)) continue;
+    const double ha = vs_[a].sq, hb = vs_[b].sq;
+    const double s_new = (hb * sa + ha * sb) / (ha + hb);
+    const double lim = 0.5 * (sb - sa);
+    move_skeleton(v, std::clamp(s_new, sa + 0.05 * lim, sb - 0.05 * lim));
+  }
+}
+
+void Remesher::skeleton_density_control() {
+  // (4.4) / (4.5): collapse when every side is under-connected, split when every side is
+  // over-connected; the branch end of an edge is not evaluated (its d^ is undefined).
+  std::vector<std::uint64_t> keys;
+  for (const auto& [k, s] : sedge_) keys.push_back(k);
+  std::sort(keys.begin(), keys.end());
+  for (auto k : keys) {
+    int v = edge_key_first(k), w = edge_key_second(k);
+    if (!m_.vertex_alive[v] || !m_.vertex_alive[w] || !is_skel(v, w)) continue;
+    const auto ef = m_.edge_faces(v, w);
+    bool all_collapse = true, all_split = true;
+    for (int f : ef) {
+      const bool sv = vs_[v].kind == VertexKind::Skeleton, sw = vs_[w].kind == VertexKind::Skeleton;
+      const int dv = sv ? side_valence(v, f) : -1, dw = sw ? side_valence(w, f) : -1;
+      bool c, s;
+      if (sv && sw) {
+        c = (dv == 1 && dw <= 2) || (dw == 1 && dv <= 2);
+        s = (dv >= 3 && dw >= 2) || (dw >= 3 && dv >= 2);
+      } else if (sv || sw) {
+        const int d = sv ? dv : dw;
+        c = d == 1;
+        s = d >= 3;
+      } else {
+        c = s = false;
+      }
+      all_collapse &= c;
+      all_split &= s;
+    }
+    if (all_collapse) {
+      int rm = (vs_[v].kind == VertexKind::Skeleton &&
+                (vs_[w].kind != VertexKind::Skeleton || side_valence(v, ef[0]) == 1))
+                   ? v
+                   : w;
+      const int keep = rm == v ? w : v;
+      if (collapse(rm, keep)) ++st_.skeleton_collapses;
+    } else if (all_split) {
+      const int u = split(v, w);
+      if (u >= 0) {
+        ++st_.skeleton_splits;
+        for (int f : std::vector<int>(m_.vfaces[u]))
+          for (int c : m_.tri[f])
+            if (c != u && m_.face_alive[f] && flip_improves_valence(u, c)) flip(u, c);
+      }
+    }
+  }
+}
+
+void Remesher::adjust_count() {
+  // Exact vertex count: collapse the relatively shortest / split the relatively longest edges.
+  const int goal = o_.target_vertices;
+  for (int round = 0; round < 50 && m_.vertex_count() != goal; ++round) {
+    const int diff = m_.vertex_count() - goal;
+    auto es = m_.edges();
+    std::vector<std::pair<double, std::uint64_t>> cand;
+    for (auto k : es) {
+      const int v = edge_key_first(k), w = edge_key_second(k);
+      const double r = (m_.pos[v] - m_.pos[w]).norm() / target(v, w);
+      cand.push_back({diff > 0 ? r : -r, k});
+    }
+    std::sort(cand.begin(), cand.end());
+    int need = std::abs(diff);
+    for (const auto& [r, k] : cand) {
+      if (need == 0) break;
+      int v = edge_key_first(k), w = edge_key_second(k);
+      if (!m_.vertex_alive[v] || !m_.vertex_alive[w] || m_.edge_face_count(v, w) == 0) continue;
+      if (diff > 0) {
+        if (vs_[v].kind != VertexKind::Free) std::swap(v, w);
+        if (collapse(v, w) || collapse(w, v)) --need;
+      } else {
+        if (split(v, w) >= 0) --need;
+      }
+    }
+  }
+}
+
+void Remesher::regularize() {
+  // §3.8: simple edges (flips lowering R) first, then long / short edges (split / collapse
+  // followed by flips of the new link), one local angle-smoothing step after each operation.
+  flip_pass(false);
+  const auto es = m_.edges();
+  int changed = 0;
+  for (auto k : es) {
+    const int v = edge_key_first(k), w = edge_key_second(k);
+    if (!m_.vertex_alive[v] || !m_.vertex_alive[w] || is_skel(v, w)) continue;
+    const auto ef = m_.edge_faces(v, w);
+    if (ef.size() != 2) continue;
+    if (vs_[v].kind != VertexKind::Free || vs_[w].kind != VertexKind::Free) continue;
+    const int dv = m_.valence(v) - 6, dw = m_.valence(w) - 6;
+    if (dv < 0 && dw < 0) {  // short edge: both black
+      const int a = m_.opposite(ef[0], v, w), b = m_.opposite(ef[1], v, w);
+      if (deviation(a, ef[0]) <= 0 || deviation(b, ef[1]) <= 0) continue;
+      if (collapse(v, w)) ++changed;
+    } else if (dv > 0 && dw > 0) {  // long edge: both white
+      const int u = split(v, w);
+      if (u < 0) continue;
+      ++changed;
+      for (int f : std::vector<int>(m_.vfaces[u]))
+        if (m_.face_alive[f])
+          for (int c : m_.tri[f])
+            if (c != u) {
+              const auto nb = m_.neighbours(c);
+              for (int x : nb)
+                if (x != u && m_.edge_face_count(c, x) == 2 && flip_improves_valence(c, x))
+                  flip(c, x);
+            }
+    }
+  }
+  flip_pass(false);
+  // Drive edges: black-white pairs moved until they meet another irregular vertex.
+  for (int round = 0; round < 10; ++round) {
+    int ok = 0;
+    for (auto k : m_.edges()) {
+      int v = edge_key_first(k), w = edge_key_second(k);
+      if (!m_.vertex_alive[v] || !m_.vertex_alive[w] || is_skel(v, w)) continue;
+      const auto ef = m_.edge_faces(v, w);
+      if (ef.size() != 2) continue;
+      int dv = deviation(v, ef[0]), dw = deviation(w, ef[0]);
+      if (dv > 0 && dw < 0) std::swap(v, w), std::swap(dv, dw);
+      if (dv < 0 && dw > 0 && (drive(v, w, 0) || drive(v, w, 1))) ++ok;
+    }
+    flip_pass(false);
+    if (ok == 0) break;
+  }
+  (void)changed;
+}
+
+std::vector<int> Remesher::intersecting_faces() const {
+  // Uniform grid over face boxes, cell = 2 x mean edge length.
+  std::vector<int> live;
+  double mean = 0;
+  Vec3 lo = Vec3::Constant(1e300), hi = -lo;
+  for (std::size_t f = 0; f < m_.tri.size(); ++f) {
+    if (!m_.face_alive[f]) continue;
+    live.push_back(static_cast<int>(f));
+    const auto& t = m_.tri[f];
+    mean += (m_.pos[t[0]] - m_.pos[t[1]]).norm();
+    for (int c : t) {
+      lo = lo.cwiseMin(m_.pos[c]);
+      hi = hi.cwiseMax(m_.pos[c]);
+    }
+  }
+  if (live.empty()) return {};
+  const double cell = std::max(2 * mean / static_cast<double>(live.size()), 1e-9);
+  auto key = [&](const Vec3& p) {
+    const Eigen::Array3d q = ((p - lo) / cell).array().floor();
+    return std::array<long long, 3>{static_cast<long long>(q[0]), static_cast<long long>(q[1]),
+                                    static_cast<long long>(q[2])};
+  };
+  std::map<std::array<long long, 3>, std::vector<int>> grid;
+  for (int f : live) {
+    const auto& t = m_.tri[f];
+    Vec3 a = m_.pos[t[0]], b = a;
+    for (int c : t) {
+      a = a.cwiseMin(m_.pos[c]);
+      b = b.cwiseMax(m_.pos[c]);
+    }
+    const auto ka = key(a), kb = key(b);
+    for (long long x = ka[0]; x <= kb[0]; ++x)
+      for (long long y = ka[1]; y <= kb[1]; ++y)
+        for (long long z = ka[2]; z <= kb[2]; ++z) grid[{x, y, z}].push_back(f);
+  }
+  std::vector<int> bad;
+  std::set<std::pair<int, int>> seen;
+  for (const auto& [k, fs] : grid)
+    for (std::size_t i = 0; i < fs.size(); ++i)
+      for (std::size_t j = i + 1; j < fs.size(); ++j) {
+        const int f = std::min(fs[i], fs[j]), g = std::max(fs[i], fs[j]);
+        if (!seen.insert({f, g}).second) continue;
+        if (triangles_intersect(m_.pos, m_.tri[f], m_.tri[g])) {
+          bad.push_back(f);
+          bad.push_back(g);
+        }
+      }
+  std::sort(bad.begin(), bad.end());
+  bad.erase(std::unique(bad.begin(), bad.end()), bad.end());
+  return bad;
+}
+
+void Remesher::repair_intersections() {
+  // Not in the thesis (it leaves global self-intersections open): faces that cut another face
+  // get Delaunay flips and their free corners pulled to the centroid of their star.
+  for (int round = 0; round < 4; ++round) {
+    const std::vector<int> bad = intersecting_faces();
+    if (bad.empty()) return;
+    for (int f : bad) {
+      if (!m_.face_alive[f]) continue;
+      const auto t = m_.tri[f];
+      for (int i = 0; i < 3; ++i)
+        if (m_.face_alive[f] && flip_improves_angle(t[i], t[(i + 1) % 3]))
+          flip(t[i], t[(i + 1) % 3]);
+      for (int c : t) {
+        if (!m_.vertex_alive[c] || vs_[c].kind != VertexKind::Free) continue;
+        Vec3 centroid = Vec3::Zero();
+        const auto nb = m_.neighbours(c);
+        for (int x : nb) centroid += m_.pos[x];
+        centroid /= static_cast<double>(nb.size());
+        move_to(c, 0.5 * (m_.pos[c] + centroid));
+      }
+    }
+  }
+}
+
+RemeshResult Remesher::run() {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (m0_.face_count() == 0) throw InvalidInputError("remesh: the input mesh has no triangles");
+  if (o_.target_vertices < 4 || o_.target_vertices > 10000000)
+    throw InvalidInputError("remesh: target vertex count must be in [4, 10^7]");
+  cos_dist_ = std::cos(o_.theta_dist_deg * std::numbers::pi / 180);
+  cos_glatt_ = std::cos(o_.theta_glatt_deg * std::numbers::pi / 180);
+  report("setup", 0);
+  build_input();
+  // M := M0 with the skeleton copied.
+  m_ = m0_;
+  patch_ = sk_.face_patch;
+  vs_.resize(m0_.pos.size());
+  for (int v = 0; v < static_cast<int>(m0_.pos.size()); ++v) {
+    VState& s = vs_[v];
+    s.kind = sk_.kind[v];
+    if (m0_.vfaces[v].empty()) continue;
+    if (s.kind == VertexKind::Branch) s.inp = v;
+    if (s.kind == VertexKind::Skeleton) {
+      s.seg = sk_.vertex_segment[v];
+      s.s = sk_.vertex_arc[v];
+    }
+    const int f = m0_.vfaces[v][0];
+    const auto& t = m0_.tri[f];
+    s.iface = f;
+    s.bary = Vec3(t[0] == v, t[1] == v, t[2] == v);
+    s.sq = sq_of(s);
+  }
+  sedge_ = sk_.edge_segment;
+  seg_edges_.assign(sk_.segments.size(), 0);
+  for (const auto& [k, s] : sedge_) ++seg_edges_[s];
+  // Scale: V ~ (2 / sqrt 3) * integral of 1 / h^2 with h = scale * sqrt(Psi).
+  double integral = 0;
+  for (std::size_t f = 0; f < m0_.tri.size(); ++f) {
+    if (!m0_.face_alive[f]) continue;
+    const auto& t = m0_.tri[f];
+    const double p = (psi0_[t[0]] + psi0_[t[1]] + psi0_[t[2]]) / 3;
+    integral += m0_.face_area(static_cast<int>(f)) / p;
+  }
+  scale_ = std::sqrt(2.0 / std::sqrt(3.0) * integral / o_.target_vertices);
+  st_.input_vertices = m0_.vertex_count();
+  st_.input_faces = m0_.face_count();
+  st_.seconds_setup = seconds_since(t0);
+
+  // Phase 1: vertex count and density (collapse / split), with flips and area-based relaxation.
+  auto t1 = std::chrono::steady_clock::now();
+  const int rounds = std::max(1, o_.adapt_iterations);
+  for (int it = 0; it < rounds; ++it) {
+    report("adapt", static_cast<double>(it) / rounds);
+    split_long();
+    collapse_short();
+    skeleton_density_control();
+    flip_pass(false);
+    for (int k = 0; k < 2; ++k) {
+      relax_pass(false);
+      skeleton_relax_pass();
+    }
+    // Steer the scale toward the requested count.
+    const double ratio = static_cast<double>(m_.vertex_count()) / o_.target_vertices;
+    scale_ *= std::pow(ratio, 0.5);
+  }
+  st_.seconds_adapt = seconds_since(t1);
+  t1 = std::chrono::steady_clock::now();
+  report("count", 0);
+  adjust_count();
+  // Area-based remeshing (§3.4): n_step x (n_area moves + Delaunay flips), skeleton control.
+  for (int step = 0; step < o_.n_step; ++step) {
+    for (int k = 0; k < o_.n_area; ++k) {
+      relax_pass(false);
+      skeleton_relax_pass();
+    }
+    flip_pass(true);
+    skeleton_density_control();
+    adjust_count();
+  }
+  st_.seconds_count = seconds_since(t1);
+  t1 = std::chrono::steady_clock::now();
+  report("regularize", 0);
+  if (o_.scheme == RemeshScheme::Regularize) {
+    regularize();
+    // Skeleton sampling follows the regularised surroundings: (4.4)/(4.5) with valence flips
+    // until it settles, then the count is restored and regularised again.
+    for (int k = 0; k < 4; ++k) {
+      const std::size_t before = st_.skeleton_splits + st_.skeleton_collapses;
+      skeleton_density_control();
+      flip_pass(false);
+      for (int j = 0; j < 2; ++j) skeleton_relax_pass();
+      if (st_.skeleton_splits + st_.skeleton_collapses == before) break;
+    }
+    adjust_count();
+    regularize();
+    adjust_count();
+    flip_pass(false);
+  } else {
+    for (int k = 0; k < 5; ++k) {
+      relax_pass(false);
+      skeleton_relax_pass();
+      flip_pass(true);
+      skeleton_density_control();
+    }
+    adjust_count();
+  }
+  st_.seconds_regularize = seconds_since(t1);
+  t1 = std::chrono::steady_clock::now();
+  for (int k = 0; k < o_.smoothing_passes; ++k) {
+    report("smooth", static_cast<double>(k) / std::max(1, o_.smoothing_passes));
+    relax_pass(o_.scheme == RemeshScheme::Regularize);
+    skeleton_relax_pass();
+  }
+  repair_intersections();
+  st_.seconds_smooth = seconds_since(t1);
+
+  RemeshResult r;
+  std::vector<int> map;
+  r.mesh = m_.to_mesh(&map);
+  r.kind.resize(r.mesh.positions.size());
+  r.segment.assign(r.mesh.positions.size(), -1);
+  r.sides.assign(r.mesh.positions.size(), 0);
+  for (std::size_t v = 0; v < map.size(); ++v) {
+    if (map[v] < 0) continue;
+    r.kind[map[v]] = vs_[v].kind;
+    if (vs_[v].kind == VertexKind::Skeleton) {
+      r.segment[map[v]] = vs_[v].seg;
+      r.sides[map[v]] = sk_.segments[vs_[v].seg].sides;
+    }
+  }
+  for (std::size_t f = 0; f < m_.tri.size(); ++f)
+    if (m_.face_alive[f]) r.face_patch.push_back(patch_[f]);
+  st_.output_vertices = static_cast<int>(r.mesh.positions.size());
+  st_.output_faces = static_cast<int>(r.mesh.triangles.size());
+  st_.skeleton_segments = sk_.segments.size();
+  st_.branch_vertices = sk_.branch_vertex_count();
+  st_.patches = static_cast<std::size_t>(sk_.patch_count);
+  st_.seconds_total = seconds_since(t0);
+  r.stats = st_;
+  r.skeleton = std::move(sk_);
+  r.density = std::move(psi0_);
+  report("done", 1);
+  return r;
+}
+
+}  // namespace
+
+RemeshResult remesh(const Mesh& input, const RemeshOptions& options) {
+  input.validate();
+  Remesher r(input, options);
+  return r.run();
+}
+
+}  // namespace scanmesh::remeshing

@@ -1,0 +1,318 @@
+// Quality report and pictures of a remeshing result (seed 001 §5.3).
+#include "scanmesh/meshing/remeshing/remesh_quality.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <sstream>
+
+#include "scanmesh/core/render.h"
+#include "scanmesh/meshing/mesh_check.h"
+
+namespace scanmesh::remeshing {
+
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+
+double point_triangle_sq(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  // Ericson 5.1.5.
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return ap.squaredNorm();
+  const Vec3 bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return bp.squaredNorm();
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return (p - (a + d1 / (d1 - d3) * ab)).squaredNorm();
+  const Vec3 cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return cp.squaredNorm();
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return (p - (a + d2 / (d2 - d6) * ac)).squaredNorm();
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+    return (p - (b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b))).squaredNorm();
+  const double denom = 1.0 / (va + vb + vc);
+  return (p - (a + ab * (vb * denom) + ac * (vc * denom))).squaredNorm();
+}
+
+// Uniform grid of triangle boxes with shell-by-shell nearest search.
+class TriangleGrid {
+ public:
+  explicit TriangleGrid(const Mesh& m) : m_(m) {
+    lo_ = Vec3::Constant(std::numeric_limits<double>::max());
+    Vec3 hi = -lo_;
+    for (const auto& p : m.positions) {
+      lo_ = lo_.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    const Vec3 ext = (hi - lo_).cwiseMax(1e-9);
+    const double cells = std::max<double>(1, static_cast<double>(m.triangles.size()));
+    cell_ = std::cbrt(ext.prod() / cells) * 1.5;
+    cell_ = std::max({cell_, ext.maxCoeff() / 512, 1e-9});
+    for (int i = 0; i < 3; ++i) n_[i] = std::max(1, static_cast<int>(std::ceil(ext[i] / cell_)));
+    start_.assign(static_cast<std::size_t>(n_[0]) * n_[1] * n_[2] + 1, 0);
+    std::vector<std::pair<std::size_t, int>> items;
+    for (std::size_t f = 0; f < m.triangles.size(); ++f) {
+      const auto& t = m.triangles[f];
+      Vec3 a = m.positions[t[0]], b = a;
+      for (int c : t) {
+        a = a.cwiseMin(m.positions[c]);
+        b = b.cwiseMax(m.positions[c]);
+      }
+      const auto ia = index(a), ib = index(b);
+      for (int z = ia[2]; z <= ib[2]; ++z)
+        for (int y = ia[1]; y <= ib[1]; ++y)
+          for (int x = ia[0]; x <= ib[0]; ++x)
+            items.push_back({cell_id(x, y, z), static_cast<int>(f)});
+    }
+    std::sort(items.begin(), items.end());
+    faces_.resize(items.size());
+    for (std::size_t i = 0; i < items.size(); ++i) {
+      faces_[i] = items[i].second;
+      ++start_[items[i].first + 1];
+    }
+    for (std::size_t i = 1; i < start_.size(); ++i) start_[i] += start_[i - 1];
+  }
+
+  double distance(const Vec3& p) const {
+    const auto c = index(p);
+    double best = std::numeric_limits<double>::max();
+    const int maxr = std::max({n_[0], n_[1], n_[2]});
+    for (int r = 0; r <= maxr; ++r) {
+      // Everything within r cells is checked; the rest is at least r * cell away from p's cell.
+      if (r > 0 && best < std::pow((r - 1) * cell_, 2)) break;
+      for (int z = c[2] - r; z <= c[2] + r; ++z)
+        for (int y = c[1] - r; y <= c[1] + r; ++y)
+          for (int x = c[0] - r; x <= c[0] + r; ++x) {
+            if (std::max({std::abs(x - c[0]), std::abs(y - c[1]), std::abs(z - c[2])}) != r)
+              continue;
+            if (x < 0 || y < 0 || z < 0 || x >= n_[0] || y >= n_[1] || z >= n_[2]) continue;
+            const std::size_t id = cell_id(x, y, z);
+            for (std::size_t i = start_[id]; i < start_[id + 1]; ++i) {
+              const auto& t = m_.triangles[faces_[i]];
+              best = std::min(best, point_triangle_sq(p, m_.positions[t[0]], m_.positions[t[1]],
+                                                      m_.positions[t[2]]));
+            }
+          }
+    }
+    return std::sqrt(best);
+  }
+
+ private:
+  std::array<int, 3> index(const Vec3& p) const {
+    std::array<int, 3> i{};
+    for (int k = 0; k < 3; ++k)
+      i[k] = std::clamp(static_cast<int>(std::floor((p[k] - lo_[k]) / cell_)), 0, n_[k] - 1);
+    return i;
+  }
+  std::size_t cell_id(int x, int y, int z) const {
+    return (static_cast<std::size_t>(z) * n_[1] + y) * n_[0] + x;
+  }
+  const Mesh& m_;
+  Vec3 lo_;
+  double cell_ = 1;
+  std::array<int, 3> n_{};
+  std::vector<std::size_t> start_;
+  std::vector<int> faces_;
+};
+
+double min_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
+  auto ang = [](const Vec3& p, const Vec3& q, const Vec3& r) {
+    const Vec3 e1 = q - p, e2 = r - p;
+    return std::atan2(e1.cross(e2).norm(), e1.dot(e2));
+  };
+  return std::min({ang(a, b, c), ang(b, c, a), ang(c, a, b)});
+}
+
+Rgb8 ramp(double t) {  // blue -> cyan -> yellow -> red
+  t = std::clamp(t, 0.0, 1.0);
+  const double r = std::clamp(2 * t - 0.5, 0.0, 1.0) * 255;
+  const double g = std::clamp(t < 0.5 ? 2 * t : 2 - 2 * t + 0.4, 0.0, 1.0) * 255;
+  const double b = std::clamp(1 - 2 * t, 0.0, 1.0) * 255;
+  return {static_cast<std::uint8_t>(r), static_cast<std::uint8_t>(g), static_cast<std::uint8_t>(b)};
+}
+
+}  // namespace
+
+double aspect_ratio(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const double la = (b - c).norm(), lb = (c - a).norm(), lc = (a - b).norm();
+  const double area = 0.5 * (b - a).cross(c - a).norm();
+  if (!(area > 0)) return std::numeric_limits<double>::infinity();
+  const double s = 0.5 * (la + lb + lc);
+  const double R = la * lb * lc / (4 * area), r = area / s;
+  return R / (2 * r);
+}
+
+std::array<double, 2> sampled_distance(const Mesh& a, const Mesh& b) {
+  std::vector<Vec3> samples = a.positions;
+  for (const auto& t : a.triangles) {
+    const Vec3 &p = a.positions[t[0]], &q = a.positions[t[1]], &r = a.positions[t[2]];
+    samples.push_back((p + q + r) / 3);
+    samples.push_back(0.5 * (p + q));
+    samples.push_back((4 * p + q + r) / 6);
+  }
+  const TriangleGrid grid(b);
+  std::vector<double> d(samples.size());
+#pragma omp parallel for schedule(dynamic, 1024)
+  for (std::size_t i = 0; i < samples.size(); ++i) d[i] = grid.distance(samples[i]);
+  double mx = 0, sum = 0;
+  for (double x : d) {
+    mx = std::max(mx, x);
+    sum += x;
+  }
+  return {mx, d.empty() ? 0.0 : sum / static_cast<double>(d.size())};
+}
+
+int optimal_valence(VertexKind kind, int sides) {
+  if (kind == VertexKind::Free) return 6;
+  if (kind == VertexKind::Skeleton) return 2 * sides + 2;
+  return 0;
+}
+
+RemeshQuality evaluate_remesh(const Mesh& input, const RemeshResult& r, bool check_si) {
+  RemeshQuality q;
+  const Mesh& m = r.mesh;
+  q.vertices = m.positions.size();
+  q.faces = m.triangles.size();
+  double amin = 10, asum = 0, qsum = 0;
+  std::size_t ge30 = 0;
+  for (const auto& t : m.triangles) {
+    const Vec3 &a = m.positions[t[0]], &b = m.positions[t[1]], &c = m.positions[t[2]];
+    const double ang = min_angle(a, b, c);
+    amin = std::min(amin, ang);
+    asum += ang;
+    ge30 += ang >= std::numbers::pi / 6 - 1e-12;
+    q.angle_histogram[std::clamp(static_cast<int>(ang * 180 / std::numbers::pi / 5), 0, 11)]++;
+    const double ar = aspect_ratio(a, b, c);
+    qsum += std::min(ar, 1e6);
+    q.q_max = std::max(q.q_max, ar);
+    q.q_histogram[std::clamp(static_cast<int>((ar - 1) * 10), 0, 9)]++;
+  }
+  const double nf = std::max<double>(1, static_cast<double>(q.faces));
+  q.min_angle_deg = amin * 180 / std::numbers::pi;
+  q.mean_min_angle_deg = asum / nf * 180 / std::numbers::pi;
+  q.fraction_min_angle_ge_30 = static_cast<double>(ge30) / nf;
+  q.q_mean = qsum / nf;
+  std::vector<std::vector<int>> nb(q.vertices);
+  for (const auto& t : m.triangles)
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        if (i != j) nb[t[i]].push_back(t[j]);
+  for (std::size_t v = 0; v < q.vertices; ++v) {
+    auto& l = nb[v];
+    std::sort(l.begin(), l.end());
+    l.erase(std::unique(l.begin(), l.end()), l.end());
+    const int opt = optimal_valence(r.kind[v], r.sides[v]);
+    if (opt == 0) continue;
+    ++q.valence_counted;
+    q.valence_optimal += static_cast<int>(l.size()) == opt;
+  }
+  q.fraction_irregular =
+      q.valence_counted ? 1.0 - static_cast<double>(q.valence_optimal) / q.valence_counted : 0.0;
+  const auto d1 = sampled_distance(m, input), d2 = sampled_distance(input, m);
+  q.hausdorff_out_to_in = d1[0];
+  q.hausdorff_in_to_out = d2[0];
+  q.hausdorff = std::max(d1[0], d2[0]);
+  q.mean_distance = d1[1];
+  Vec3 lo = input.positions[0], hi = lo;
+  for (const auto& p : input.positions) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  q.bbox_diagonal = (hi - lo).norm();
+  if (check_si) {
+    const MeshCheckReport rep = check_mesh(m, {.self_intersections = true});
+    q.self_intersections_checked = true;
+    q.self_intersections = rep.self_intersections;
+  }
+  return q;
+}
+
+std::string RemeshQuality::to_json() const {
+  std::ostringstream o;
+  o.precision(6);
+  o << "{\n  \"vertices\": " << vertices << ",\n  \"faces\": " << faces
+    << ",\n  \"min_angle_deg\": " << min_angle_deg
+    << ",\n  \"mean_min_angle_deg\": " << mean_min_angle_deg
+    << ",\n  \"fraction_min_angle_ge_30\": " << fraction_min_angle_ge_30
+    << ",\n  \"q_mean\": " << q_mean << ",\n  \"q_max\": " << (std::isfinite(q_max) ? q_max : 1e308)
+    << ",\n  \"q_histogram\": [";
+  for (std::size_t i = 0; i < q_histogram.size(); ++i) o << (i ? ", " : "") << q_histogram[i];
+  o << "],\n  \"min_angle_histogram_5deg\": [";
+  for (std::size_t i = 0; i < angle_histogram.size(); ++i)
+    o << (i ? ", " : "") << angle_histogram[i];
+  o << "],\n  \"valence_counted\": " << valence_counted
+    << ",\n  \"valence_optimal\": " << valence_optimal
+    << ",\n  \"fraction_irregular\": " << fraction_irregular
+    << ",\n  \"hausdorff_mm\": " << hausdorff
+    << ",\n  \"hausdorff_output_to_input_mm\": " << hausdorff_out_to_in
+    << ",\n  \"hausdorff_input_to_output_mm\": " << hausdorff_in_to_out
+    << ",\n  \"mean_distance_mm\": " << mean_distance
+    << ",\n  \"bbox_diagonal_mm\": " << bbox_diagonal << ",\n  \"self_intersections\": "
+    << (self_intersections_checked ? std::to_string(self_intersections) : "null") << "\n}\n";
+  return o.str();
+}
+
+Image8 render_quality(const RemeshResult& r, int view_size) {
+  const Mesh& m = r.mesh;
+  std::vector<std::vector<int>> nb(m.positions.size());
+  for (const auto& t : m.triangles)
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        if (i != j) nb[t[i]].push_back(t[j]);
+  std::vector<int> mark(m.positions.size(), 0);
+  for (std::size_t v = 0; v < nb.size(); ++v) {
+    auto& l = nb[v];
+    std::sort(l.begin(), l.end());
+    l.erase(std::unique(l.begin(), l.end()), l.end());
+    const int opt = optimal_valence(r.kind[v], r.sides[v]);
+    if (opt)
+      mark[v] = static_cast<int>(l.size()) > opt ? 1 : (static_cast<int>(l.size()) < opt ? -1 : 0);
+  }
+  // Unshared corners so each face has its own colour; irregular corners white / black.
+  Mesh s;
+  for (const auto& t : m.triangles) {
+    const double q = aspect_ratio(m.positions[t[0]], m.positions[t[1]], m.positions[t[2]]);
+    const Rgb8 c = ramp(q - 1);
+    const int base = static_cast<int>(s.positions.size());
+    for (int k = 0; k < 3; ++k) {
+      s.positions.push_back(m.positions[t[k]]);
+      s.colors.push_back(mark[t[k]] > 0 ? Rgb8{255, 255, 255} : mark[t[k]] < 0 ? Rgb8{0, 0, 0} : c);
+    }
+    s.triangles.push_back({base, base + 1, base + 2});
+  }
+  RenderOptions o;
+  o.width = o.height = view_size;
+  o.draw_wireframe = true;
+  Image8 a = render_mesh(s, o);
+  o.azimuth_deg += 90;
+  Image8 b = render_mesh(s, o);
+  return hconcat({a, b});
+}
+
+Image8 quality_histograms(const RemeshQuality& q) {
+  const int w = 420, h = 260;
+  auto chart = [&](const auto& bins, Rgb8 colour) {
+    Image8 img(w, h, 3, 255);
+    std::size_t mx = 1;
+    for (auto b : bins) mx = std::max<std::size_t>(mx, b);
+    const int nb = static_cast<int>(bins.size());
+    const int bw = (w - 20) / nb;
+    for (int i = 0; i < nb; ++i) {
+      const int bh = static_cast<int>(static_cast<double>(bins[i]) / mx * (h - 30));
+      for (int x = 10 + i * bw + 1; x < 10 + (i + 1) * bw - 1; ++x)
+        for (int y = h - 10 - bh; y < h - 10; ++y) img.set_rgb(x, y, colour);
+    }
+    for (int x = 5; x < w - 5; ++x) img.set_rgb(x, h - 10, {0, 0, 0});
+    return img;
+  };
+  // Left: Q = R/2r in bins of 0.1 from 1 (best) to >= 1.9; right: min angle, 5 deg bins to 60.
+  return hconcat({chart(q.q_histogram, {200, 80, 60}), chart(q.angle_histogram, {60, 110, 200})},
+                 {255, 255, 255});
+}
+
+}  // namespace scanmesh::remeshing

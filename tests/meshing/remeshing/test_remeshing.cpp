@@ -1,0 +1,279 @@
+// Seed 001 remeshing: skeleton, density, the non-manifold acceptance input (two boxes sharing a
+// face), feature lines, vertex count, error bounds, self-intersections, determinism.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <set>
+
+#include "remesh_test_meshes.h"
+#include "scanmesh/core/errors.h"
+#include "scanmesh/meshing/mesh_check.h"
+#include "scanmesh/meshing/remeshing/remesh.h"
+#include "scanmesh/meshing/remeshing/remesh_quality.h"
+
+namespace scanmesh::remeshing {
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+
+std::map<std::uint64_t, std::vector<int>> edge_faces(const Mesh& m) {
+  std::map<std::uint64_t, std::vector<int>> e;
+  for (std::size_t f = 0; f < m.triangles.size(); ++f)
+    for (int i = 0; i < 3; ++i)
+      e[edge_key(m.triangles[f][i], m.triangles[f][(i + 1) % 3])].push_back(static_cast<int>(f));
+  return e;
+}
+
+bool on_box_edge_line(const Vec3& p, double s) {
+  // On a line where two coordinates take a box-edge value (x in {0, s, 2s}, y, z in {0, s}).
+  auto at = [&](double c, std::initializer_list<double> vals) {
+    for (double v : vals)
+      if (std::abs(c - v) < 1e-9) return true;
+    return false;
+  };
+  const bool bx = at(p.x(), {0, s, 2 * s}), by = at(p.y(), {0, s}), bz = at(p.z(), {0, s});
+  return (bx && by) || (bx && bz) || (by && bz);
+}
+
+TEST(FeatureSkeleton, TwoBoxesSeamHasThreeSidesAndTwelveCorners) {
+  const NmMesh m(test::two_boxes(10, 6));
+  const FeatureSkeleton sk = build_feature_skeleton(m, {}, {.sharp_angle_deg = 45});
+  EXPECT_EQ(sk.branch_vertex_count(), 12u);  // 8 + 8 corners, 4 shared
+  EXPECT_EQ(sk.nonmanifold_edges, 4u * 6);
+  EXPECT_EQ(sk.patch_count, 11);  // 5 + 5 box faces + the wall
+  int seams = 0;
+  double total = 0;
+  for (const auto& sg : sk.segments) {
+    total += sg.length();
+    EXPECT_NEAR(sg.length(), 10.0, 1e-9);
+    EXPECT_EQ(sg.vertices.size(), 7u);
+    if (sg.sides == 3) {
+      ++seams;
+    } else {
+      EXPECT_EQ(sg.sides, 2);
+    }
+  }
+  EXPECT_EQ(seams, 4);
+  EXPECT_EQ(sk.segments.size(), 20u);
+  EXPECT_NEAR(total, 200.0, 1e-9);
+}
+
+TEST(FeatureSkeleton, ClosedLoopGetsOneBranchVertexAndKinksSplitIt) {
+  // The wavy sheet's border is one closed boundary loop with four 90-degree corners.
+  const NmMesh m(test::wavy_sheet(8, 4, nullptr));
+  const FeatureSkeleton sk = build_feature_skeleton(m);
+  EXPECT_EQ(sk.branch_vertex_count(), 4u);
+  EXPECT_EQ(sk.segments.size(), 4u);
+  for (const auto& sg : sk.segments) EXPECT_EQ(sg.sides, 1);
+  // Without the kink rule the loop still gets exactly one branch vertex.
+  const FeatureSkeleton loose = build_feature_skeleton(m, {}, {.kink_angle_deg = 179});
+  EXPECT_EQ(loose.branch_vertex_count(), 1u);
+  ASSERT_EQ(loose.segments.size(), 1u);
+  EXPECT_EQ(loose.segments[0].vertices.front(), loose.segments[0].vertices.back());
+}
+
+TEST(FeatureLinesFile, RoundTripAndErrors) {
+  const FeatureLines l{{{1, 2, 3}, {7, 8}}, {5}};
+  const FeatureLines r = parse_feature_lines(format_feature_lines(l), "x");
+  EXPECT_EQ(r.lines, l.lines);
+  EXPECT_EQ(r.fixed, l.fixed);
+  EXPECT_THROW(parse_feature_lines("line 1 2\n", "x"), FileFormatError);  // no header
+  EXPECT_THROW(parse_feature_lines("scanmesh_feature_lines 1\nline 1\n", "x"), FileFormatError);
+  EXPECT_THROW(parse_feature_lines("scanmesh_feature_lines 1\nline 1 -2\n", "x"), FileFormatError);
+  EXPECT_THROW(parse_feature_lines("scanmesh_feature_lines 1\ncurve 1 2\n", "x"), FileFormatError);
+  EXPECT_THROW(parse_feature_lines("scanmesh_feature_lines 1\nline 1 99999999999\n", "x"),
+               FileFormatError);
+  const NmMesh m(test::wavy_sheet(4, 2, nullptr));
+  EXPECT_THROW(build_feature_skeleton(m, {{{0, 24}}, {}}), InvalidInputError);  // no such edge
+  EXPECT_THROW(build_feature_skeleton(m, {{}, {1000}}), InvalidInputError);
+}
+
+TEST(Density, SphereCurvatureIsOneOverRadius) {
+  const NmMesh m(test::sphere(5.0, 40, 80));
+  const auto k = estimate_kappa_max(m);
+  double sum = 0;
+  for (double x : k) sum += x;
+  EXPECT_NEAR(sum / static_cast<double>(k.size()), 0.2, 0.02);
+  // Psi of a sphere is uniform (median-normalised to 1) for any gamma.
+  const auto psi = compute_density(m, {.gamma = 3, .n_filter = 10});
+  for (double p : psi) EXPECT_NEAR(p, 1.0, 0.35);
+  EXPECT_THROW(compute_density(m, {.user = {1.0, 2.0}}), InvalidInputError);
+}
+
+TEST(Remesh, TwoBoxesKeepSeamsSidesLabelsAndCount) {
+  const Mesh in = test::two_boxes(10, 10);
+  RemeshOptions o;
+  o.target_vertices = 400;
+  o.density.gamma = 0;
+  o.skeleton.sharp_angle_deg = 45;
+  const RemeshResult r = remesh(in, o);
+  const Mesh& m = r.mesh;
+  EXPECT_EQ(static_cast<int>(m.positions.size()), o.target_vertices);  // within 1 %: exact
+  const auto ef = edge_faces(m);
+  // Seam: edges with 3 faces cover exactly the square x = 10 boundary (perimeter 40), with one
+  // face of each label.
+  double seam = 0, creases = 0;
+  std::size_t other_nonmanifold = 0;
+  for (const auto& [k, fs] : ef) {
+    const Vec3 a = m.positions[edge_key_first(k)], b = m.positions[edge_key_second(k)];
+    if (fs.size() == 3) {
+      std::set<int> labels;
+      for (int f : fs) labels.insert(m.face_labels[f]);
+      EXPECT_EQ(labels, (std::set<int>{1, 2, 3}));
+      EXPECT_NEAR(a.x(), 10.0, 1e-9);
+      EXPECT_NEAR(b.x(), 10.0, 1e-9);
+      seam += (a - b).norm();
+    } else if (fs.size() != 2) {
+      ++other_nonmanifold;
+    }
+    if (on_box_edge_line(a, 10) && on_box_edge_line(b, 10) &&
+        ((a - b).cwiseAbs().array() > 1e-9).count() == 1)
+      creases += (a - b).norm();
+  }
+  EXPECT_EQ(other_nonmanifold, 0u);
+  EXPECT_NEAR(seam, 40.0, 1e-6);
+  EXPECT_NEAR(creases, 200.0, 1e-6);  // every box edge is still an edge chain
+  // No face leaves its side: label 3 stays on the wall, labels 1 / 2 on their box.
+  for (std::size_t f = 0; f < m.triangles.size(); ++f) {
+    for (int c : m.triangles[f]) {
+      const Vec3& p = m.positions[c];
+      if (m.face_labels[f] == 3) {
+        EXPECT_NEAR(p.x(), 10.0, 1e-9);
+      }
+      if (m.face_labels[f] == 1) {
+        EXPECT_LE(p.x(), 10.0 + 1e-9);
+      }
+      if (m.face_labels[f] == 2) {
+        EXPECT_GE(p.x(), 10.0 - 1e-9);
+      }
+    }
+  }
+  // Same skeleton topology on the output: 12 branch vertices at the corners, every seam vertex
+  // with k = 3 sides.
+  std::size_t branches = 0;
+  for (std::size_t v = 0; v < m.positions.size(); ++v) {
+    if (r.kind[v] == VertexKind::Branch) {
+      ++branches;
+      const Vec3& p = m.positions[v];
+      EXPECT_TRUE(on_box_edge_line(p, 10));
+    }
+    if (r.kind[v] == VertexKind::Skeleton) {
+      EXPECT_TRUE(on_box_edge_line(m.positions[v], 10));
+    }
+  }
+  EXPECT_EQ(branches, 12u);
+  const MeshCheckReport rep = check_mesh(m);
+  EXPECT_EQ(rep.self_intersections, 0u);
+  EXPECT_EQ(rep.degenerate_faces, 0u);
+  EXPECT_EQ(rep.duplicate_faces, 0u);
+  const RemeshQuality q = evaluate_remesh(in, r, false);
+  EXPECT_GT(q.min_angle_deg, 15.0);
+  EXPECT_LT(q.hausdorff, 1e-6);  // flat faces: the output lies on the input exactly
+}
+
+TEST(Remesh, FeatureLineStaysAnEdgeChainOnTheInputLine) {
+  std::vector<int> line;
+  const Mesh in = test::wavy_sheet(30, 11, &line);
+  const double y0 = in.positions[line[0]].y();
+  RemeshOptions o;
+  o.target_vertices = 300;
+  o.density.gamma = 1;
+  o.features.lines = {line};
+  const RemeshResult r = remesh(in, o);
+  const Mesh& m = r.mesh;
+  EXPECT_EQ(static_cast<int>(m.positions.size()), o.target_vertices);
+  double along = 0;
+  for (const auto& [k, fs] : edge_faces(m)) {
+    const Vec3 a = m.positions[edge_key_first(k)], b = m.positions[edge_key_second(k)];
+    if (std::abs(a.y() - y0) < 1e-12 && std::abs(b.y() - y0) < 1e-12)
+      along += std::abs(b.x() - a.x());
+  }
+  EXPECT_NEAR(along, 20.0, 1e-9);  // the line is covered by output edges from x = 0 to 20
+  int on_line = 0;
+  for (std::size_t v = 0; v < m.positions.size(); ++v) {
+    if (r.kind[v] != VertexKind::Skeleton || r.sides[v] != 2) continue;
+    const Vec3& p = m.positions[v];
+    ++on_line;
+    EXPECT_NEAR(p.y(), y0, 1e-12);
+    // Exactly on the input polyline: between grid samples the input is the chord.
+    const double h = 20.0 / 30;
+    const int i = std::min(29, static_cast<int>(p.x() / h));
+    const double x0 = i * h, x1 = (i + 1) * h, t = (p.x() - x0) / h;
+    EXPECT_NEAR(p.z(), (1 - t) * 2 * std::sin(x0 / 4) + t * 2 * std::sin(x1 / 4), 1e-9);
+  }
+  EXPECT_GT(on_line, 5);
+  EXPECT_EQ(check_mesh(m).self_intersections, 0u);
+}
+
+TEST(Remesh, SphereRespectsErrorBoundsAndIsRegular) {
+  const Mesh in = test::sphere(10.0, 50, 100);
+  RemeshOptions o;
+  o.target_vertices = 1500;
+  o.density.gamma = 0;
+  o.theta_dist_deg = 40;
+  o.theta_glatt_deg = 25;
+  const RemeshResult r = remesh(in, o);
+  const Mesh& m = r.mesh;
+  EXPECT_EQ(static_cast<int>(m.positions.size()), o.target_vertices);
+  // Bounds against the exact sphere normals (the input's discrete normals differ by < 1 deg).
+  const double tol = 1.5;
+  double worst_glatt = 0, worst_dist = 0;
+  for (const auto& t : m.triangles) {
+    const Vec3 nf = (m.positions[t[1]] - m.positions[t[0]])
+                        .cross(m.positions[t[2]] - m.positions[t[0]])
+                        .normalized();
+    for (int i = 0; i < 3; ++i) {
+      const Vec3 ni = m.positions[t[i]].normalized(), nj = m.positions[t[(i + 1) % 3]].normalized();
+      worst_glatt = std::max(worst_glatt, std::acos(std::clamp(nf.dot(ni), -1.0, 1.0)));
+      worst_dist = std::max(worst_dist, std::acos(std::clamp(ni.dot(nj), -1.0, 1.0)));
+    }
+  }
+  EXPECT_LT(worst_glatt * 180 / std::numbers::pi, o.theta_glatt_deg + tol);
+  EXPECT_LT(worst_dist * 180 / std::numbers::pi, o.theta_dist_deg + tol);
+  const RemeshQuality q = evaluate_remesh(in, r, true);
+  EXPECT_EQ(q.self_intersections, 0u);
+  EXPECT_GT(q.fraction_min_angle_ge_30, 0.98);
+  EXPECT_LT(q.fraction_irregular, 0.15);
+  // All vertices on the input (a polyhedron inscribed in the sphere): radius within the chord
+  // sagitta of the input.
+  for (const auto& p : m.positions) EXPECT_NEAR(p.norm(), 10.0, 0.03);
+}
+
+TEST(Remesh, DeterministicAndRejectsBadTargets) {
+  const Mesh in = test::two_boxes(10, 6);
+  RemeshOptions o;
+  o.target_vertices = 200;
+  o.skeleton.sharp_angle_deg = 45;
+  const RemeshResult a = remesh(in, o), b = remesh(in, o);
+  EXPECT_EQ(a.mesh.positions, b.mesh.positions);
+  EXPECT_EQ(a.mesh.triangles, b.mesh.triangles);
+  EXPECT_EQ(a.mesh.face_labels, b.mesh.face_labels);
+  o.target_vertices = 2;
+  EXPECT_THROW(remesh(in, o), InvalidInputError);
+  EXPECT_THROW(remesh(Mesh{}, {}), InvalidInputError);
+}
+
+TEST(Prepare, DropsCrumbsAndClosesSmallHoles) {
+  Mesh in = test::wavy_sheet(6, 3, nullptr);
+  // A detached triangle far away.
+  const int base = static_cast<int>(in.positions.size());
+  in.positions.push_back({100, 0, 0});
+  in.positions.push_back({101, 0, 0});
+  in.positions.push_back({100, 1, 0});
+  in.triangles.push_back({base, base + 1, base + 2});
+  in.face_labels.push_back(0);
+  PrepareStats st;
+  const Mesh out = prepare_input(in, {.min_component_faces = 5, .max_hole_edges = 30}, &st);
+  EXPECT_EQ(st.components_removed, 1u);
+  EXPECT_EQ(st.faces_removed, 1u);
+  EXPECT_EQ(st.holes_filled, 1u);  // the sheet's border (24 edges) closes into a cap
+  const MeshCheckReport rep = check_mesh(out, {.self_intersections = false});
+  EXPECT_EQ(rep.topology.boundary_loops, 0u);
+  EXPECT_TRUE(rep.edge_manifold());
+}
+
+}  // namespace
+}  // namespace scanmesh::remeshing
