@@ -300,7 +300,9 @@ void SessionWriter::append_step(double angle_rad, const std::vector<drivers::Fra
   fsync_path(folder_ / "frames", true);
   const std::string line = step_to_json_line(record);
   const fs::path steps = folder_ / "steps.jsonl";
-  const int fd = ::open(steps.c_str(), O_WRONLY | O_APPEND | O_CREAT | O_CLOEXEC, 0644);
+  // non-atomic: the append-only step journal; a torn last line is dropped on resume.
+  const int flags = O_WRONLY | O_APPEND | O_CREAT | O_CLOEXEC;  // non-atomic: step journal
+  const int fd = ::open(steps.c_str(), flags, 0644);
   if (fd < 0) throw IoError("cannot open '" + steps.string() + "': " + std::strerror(errno));
   std::size_t done = 0;
   while (done < line.size()) {

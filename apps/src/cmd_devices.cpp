@@ -342,8 +342,10 @@ void register_devices_commands(CLI::App& app, CommandList& commands) {
   scan->add_option("--device", s->device, "Camera: /dev/videoN or its card name");
   scan->add_option("--board", s->board, "Board: /dev/ttyACM0, VID:PID or usb:BUS:ADDR");
   scan->add_flag("--sim", s->sim, "Use the simulated board and camera");
-  scan->add_option("--scene", s->scene, "Scene YAML for the simulated camera")
-      ->check(CLI::ExistingFile);
+  scan->add_option("--scene", s->scene,
+                   "Scene YAML (or 'head') rendered by the simulated turntable camera; default: a "
+                   "fast synthetic line pattern")
+      ->check(CLI::ExistingFile | CLI::IsMember({"head"}));
   scan->add_option("--steps", s->steps, "Turntable steps per turn")->capture_default_str();
   scan->add_option("--lasers", s->lasers, "Lasers (0..2)")->capture_default_str();
   scan->add_option("--out", s->out, "Session folder")->required();

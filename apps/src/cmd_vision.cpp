@@ -10,6 +10,7 @@
 #include "scanmesh/acquisition/calibration.h"
 #include "scanmesh/acquisition/reconstruction.h"
 #include "scanmesh/acquisition/scan_cleaning.h"
+#include "scanmesh/acquisition/session.h"
 #include "scanmesh/core/errors.h"
 #include "scanmesh/core/grid_file.h"
 #include "scanmesh/sim/turntable_camera.h"
@@ -77,6 +78,7 @@ int run_calibrate(const CalibrateArgs& a) {
 }
 
 struct ReconstructCliArgs {
+  std::string session;  //!< recorded session folder; empty with --sim
   bool sim = false;
   std::string scene, rig;
   int steps = 400;
@@ -142,6 +144,8 @@ void register_vision_commands(CLI::App& app, CommandList& commands) {
   auto rec = std::make_shared<ReconstructCliArgs>();
   auto* rec_cmd = app.add_subcommand(
       "reconstruct", "Laser frames -> range grid: extract, triangulate, assemble, clean");
+  rec_cmd->add_option("session", rec->session, "Recorded session folder (scanmesh scan --out)")
+      ->check(CLI::ExistingDirectory);
   rec_cmd->add_flag("--sim", rec->sim, "Render the steps with the simulated camera");
   rec_cmd->add_option("--scene", rec->scene, "Scene YAML (default: built-in head)")
       ->check(CLI::ExistingFile);
@@ -168,10 +172,18 @@ void register_vision_commands(CLI::App& app, CommandList& commands) {
   rec_cmd->add_option("-o,--out", c.out, "Output grid file (.smg)")->required();
   commands.push_back(
       {rec_cmd, [rec] {
+         if (!rec->session.empty() && rec->sim)
+           throw InvalidInputError("reconstruct: give a SESSION folder or --sim, not both");
+         if (!rec->session.empty()) {
+           // Replay: the recorded steps go through the same pipeline with no device.
+           const SessionReader session(rec->session);
+           if (!session.complete())
+             std::cerr << "scanmesh: warning: " << rec->session << " is incomplete ("
+                       << session.step_count() << " steps); 'scan --resume' completes it\n";
+           return run_reconstruct_from(session, rec->common);
+         }
          if (!rec->sim)
-           throw InvalidInputError(
-               "reconstruct: only --sim is available on this branch (session "
-               "folders come with the devices branch)");
+           throw InvalidInputError("reconstruct: give a recorded SESSION folder or --sim");
          const sim::Scene scene = rec->scene.empty() ? sim::builtin_head_scene()
                                                      : sim::Scene::from_yaml_file(rec->scene);
          const sim::TurntableCamera camera(scene, load_rig(rec->rig));

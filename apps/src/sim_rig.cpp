@@ -4,6 +4,8 @@
 #include <thread>
 
 #include "scanmesh/core/errors.h"
+#include "scanmesh/sim/scene.h"
+#include "scanmesh/sim/turntable_camera.h"
 
 namespace scanmesh::cli {
 
@@ -48,11 +50,26 @@ void apply_sim_fault(const std::string& spec, sim::SimBoardOptions& board,
 }
 
 sim::FrameRenderer make_sim_renderer(const std::string& scene, int width, int height) {
-  if (!scene.empty())
-    throw InvalidInputError(
-        "--scene needs the scene renderer sim::TurntableCamera, which is not "
-        "in this build yet; leave --scene out for the synthetic renderer");
-  return sim::synthetic_turntable_renderer(width, height);
+  // Without a scene the synthetic renderer stays the default: it is fast and its frames are what
+  // the session and kill/resume tests compare bit for bit.
+  if (scene.empty()) return sim::synthetic_turntable_renderer(width, height);
+  auto world = std::make_shared<sim::Scene>(scene == "head" ? sim::builtin_head_scene()
+                                                            : sim::Scene::from_yaml_file(scene));
+  // The built-in Ciclop rig at the requested frame size: intrinsics scale with the sensor.
+  sim::RigConfig rig = sim::builtin_ciclop_rig();
+  const double sx = static_cast<double>(width) / rig.width;
+  const double sy = static_cast<double>(height) / rig.height;
+  rig.intrinsics.fx *= sx;
+  rig.intrinsics.cx = (rig.intrinsics.cx + 0.5) * sx - 0.5;
+  rig.intrinsics.fy *= sy;
+  rig.intrinsics.cy = (rig.intrinsics.cy + 0.5) * sy - 0.5;
+  rig.width = width;
+  rig.height = height;
+  auto camera = std::make_shared<sim::TurntableCamera>(*world, rig);
+  // The closure owns the scene and the camera (which keeps a reference to the scene).
+  return [world, camera](double angle_rad, unsigned laser_mask) {
+    return camera->render(angle_rad, laser_mask);
+  };
 }
 
 SimCameraSource::SimCameraSource(std::shared_ptr<sim::SimCamera> camera,

@@ -122,7 +122,8 @@ class SerialTransport final : public Transport {
 std::unique_ptr<Transport> open_serial_transport(const std::string& path, int baud) {
   const speed_t speed = baud_constant(baud);
   if (speed == 0) throw InvalidInputError("unsupported baud rate " + std::to_string(baud));
-  const int fd = ::open(path.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
+  const int flags = O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC;  // non-atomic: a tty, not a file
+  const int fd = ::open(path.c_str(), flags);
   if (fd < 0) {
     const int e = errno;
     std::string problem = "cannot open: " + errno_text(e);

@@ -73,7 +73,8 @@ std::string open_problem(int e) {
 
 // Opens `path` and reads its capabilities and formats; returns the fd (caller closes).
 int open_and_query(const std::string& path, CameraInfo& info) {
-  const int fd = ::open(path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
+  const int fd = ::open(path.c_str(),
+                        O_RDWR | O_NONBLOCK | O_CLOEXEC);  // non-atomic: a device node, not a file
   if (fd < 0) throw DeviceError(path, "cannot open: " + open_problem(errno));
   v4l2_capability cap{};
   if (xioctl(fd, VIDIOC_QUERYCAP, &cap) != 0) {
