@@ -2,6 +2,9 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <optional>
+#include <span>
+#include <utility>
 
 #include "scanmesh/core/errors.h"
 #include "scanmesh/drivers/camera.h"
@@ -31,6 +34,41 @@ PixelFormat parse_pixel_format(const std::string& name) {
   if (name == "rgb24") return PixelFormat::Rgb24;
   throw InvalidInputError("unknown pixel format '" + name + "' (yuyv, mjpeg or rgb24)");
 }
+
+namespace {
+
+//! Width and height from a JPEG's frame header (any SOFn marker), walking the marker segments
+//! up to the start of scan; nullopt when there is none or a segment runs past the end.
+std::optional<std::pair<int, int>> jpeg_declared_size(std::span<const std::uint8_t> b) {
+  std::size_t i = 2;  // after SOI
+  while (i + 4 <= b.size()) {
+    if (b[i] != 0xff) return std::nullopt;
+    const std::uint8_t marker = b[i + 1];
+    if (marker == 0xff) {  // fill byte
+      ++i;
+      continue;
+    }
+    if (marker == 0x01 || (marker >= 0xd0 && marker <= 0xd7)) {  // no length field
+      i += 2;
+      continue;
+    }
+    if (marker == 0xda || marker == 0xd9) return std::nullopt;  // scan or end before a header
+    const std::size_t length = (std::size_t{b[i + 2]} << 8) | b[i + 3];
+    if (length < 2 || i + 2 + length > b.size()) return std::nullopt;
+    const bool sof =
+        marker >= 0xc0 && marker <= 0xcf && marker != 0xc4 && marker != 0xc8 && marker != 0xcc;
+    if (sof) {
+      if (length < 8) return std::nullopt;  // P, Y, X, Nf at least
+      const int height = (b[i + 5] << 8) | b[i + 6];
+      const int width = (b[i + 7] << 8) | b[i + 8];
+      return std::make_pair(width, height);
+    }
+    i += 2 + length;
+  }
+  return std::nullopt;
+}
+
+}  // namespace
 
 Image8 decode_frame(PixelFormat format, std::span<const std::uint8_t> bytes, int width, int height,
                     std::uint32_t bytes_per_line, const std::string& source) {
@@ -90,6 +128,16 @@ Image8 decode_frame(PixelFormat format, std::span<const std::uint8_t> bytes, int
       while (end > 2 && bytes[end - 1] == 0) --end;
       if (bytes[end - 2] != 0xff || bytes[end - 1] != 0xd9)
         throw FileFormatError(source, "MJPEG frame is truncated (no JPEG EOI marker)");
+      // The size the JPEG header declares must be the negotiated one *before* decoding: a
+      // corrupt or hostile header declaring 60000 x 60000 would otherwise make OpenCV
+      // allocate gigabytes (found by fuzz_v4l2_frame_decode).
+      const auto declared = jpeg_declared_size(bytes);
+      if (!declared)
+        throw FileFormatError(source, "MJPEG frame has no JPEG frame header (SOF marker)");
+      if (declared->first != width || declared->second != height)
+        throw FileFormatError(source, "MJPEG frame declares " + std::to_string(declared->first) +
+                                          "x" + std::to_string(declared->second) + ", expected " +
+                                          std::to_string(width) + "x" + std::to_string(height));
       cv::Mat decoded;
       try {
         const cv::Mat buffer(1, static_cast<int>(bytes.size()), CV_8UC1,
