@@ -9,6 +9,8 @@
 #include <cstring>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <type_traits>
+#include <utility>
 
 #include "scanmesh/core/atomic_file.h"
 #include "scanmesh/core/binary_io.h"
@@ -48,14 +50,31 @@ std::string frame_file_name(std::size_t step, std::size_t k, FrameStorage storag
 }
 
 // Typed getters that turn every json type or range problem into a FileFormatError.
+// Integer fields must be json integers that fit T: nlohmann converts a float such as
+// 1.7e11 to int with a plain cast, which is undefined behaviour when it does not fit
+// (found by fuzz_session_manifest).
 template <typename T>
 T get(const json& j, const char* key, const fs::path& file) {
   if (!j.is_object() || !j.contains(key))
     throw FileFormatError(file, std::string("missing field '") + key + "'");
-  try {
-    return j.at(key).get<T>();
-  } catch (const json::exception&) {
-    throw FileFormatError(file, std::string("field '") + key + "' has the wrong type");
+  const json& v = j.at(key);
+  const auto wrong_type = [&] {
+    return FileFormatError(file, std::string("field '") + key + "' has the wrong type");
+  };
+  if constexpr (std::is_integral_v<T> && !std::is_same_v<T, bool>) {
+    if (!v.is_number_integer()) throw wrong_type();
+    const bool fits = v.is_number_unsigned() ? std::in_range<T>(v.get<std::uint64_t>())
+                                             : std::in_range<T>(v.get<std::int64_t>());
+    if (!fits)
+      throw FileFormatError(file, std::string("field '") + key + "' is out of range");
+    return v.is_number_unsigned() ? static_cast<T>(v.get<std::uint64_t>())
+                                  : static_cast<T>(v.get<std::int64_t>());
+  } else {
+    try {
+      return v.get<T>();
+    } catch (const json::exception&) {
+      throw wrong_type();
+    }
   }
 }
 
