@@ -10,9 +10,11 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <memory>
 #include <ostream>
 #include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -109,6 +111,26 @@ TEST(FuzzCorpus, EveryInputFolderHasAnEntryPoint) {
         EXPECT_TRUE(names.count(d.path().filename().string()))
             << d.path() << " has no tests/fuzz/fuzz_" << d.path().filename().string() << ".cpp";
       }
+  }
+}
+
+// CI fuzzes in replay mode with a fixed number of inputs per target from ci-runs.txt
+// (scripts/fuzz); a target without a line would silently fall back to a default budget.
+TEST(FuzzCorpus, EveryEntryPointHasAReplayBudget) {
+  std::ifstream table(kFuzzDir / "ci-runs.txt");
+  ASSERT_TRUE(table) << "missing " << kFuzzDir / "ci-runs.txt";
+  std::map<std::string, long> runs;
+  for (std::string line; std::getline(table, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    std::string name;
+    long n = 0;
+    ASSERT_TRUE(fields >> name >> n) << "bad line in ci-runs.txt: " << line;
+    runs[name] = n;
+  }
+  for (const Entry& e : entries()) {
+    ASSERT_TRUE(runs.count(e.name)) << "fuzz_" << e.name << ".cpp has no line in ci-runs.txt";
+    EXPECT_GE(runs[e.name], 10000) << e.name;
   }
 }
 
