@@ -40,9 +40,19 @@ RunResult run(const std::string& args) {
   return result;
 }
 
+// One scratch folder per test process, removed when the process exits (ctest runs each test in
+// its own process, so leftovers of earlier runs never accumulate in /tmp).
+struct ScratchRoot {
+  fs::path path = fs::temp_directory_path() / ("scanmesh_test_cli_" + std::to_string(getpid()));
+  ~ScratchRoot() {
+    std::error_code ignored;
+    fs::remove_all(path, ignored);
+  }
+};
+
 fs::path scratch_dir(const std::string& name) {
-  const fs::path dir =
-      fs::temp_directory_path() / ("scanmesh_test_cli_" + std::to_string(getpid())) / name;
+  static const ScratchRoot root;
+  const fs::path dir = root.path / name;
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
