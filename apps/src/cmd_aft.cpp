@@ -206,11 +206,13 @@ int run_animesh(const AnimeshArgs& a) {
     regions.push_back({{"region", s.region},
                        {"name", l.graph.regions[s.region].name},
                        {"unit_mm", l.graph.regions[s.region].unit_mm},
+                       {"mesher", s.mesher},
                        {"triangles", s.triangles},
                        {"steiner_points", s.steiner_points},
                        {"chose_new", s.chose_new},
                        {"chose_existing", s.chose_existing},
                        {"chose_circumcentre", s.chose_circumcentre},
+                       {"rejected_circumcentres", s.rejected_circumcentres},
                        {"unmeshed_front_edges", s.unmeshed_front_edges}});
   j["regions"] = regions;
   j["line_edges"] = am.line_edges;

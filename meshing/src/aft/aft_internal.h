@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "scanmesh/meshing/aft/animesh.h"
@@ -42,5 +43,11 @@ struct RegionMeshInput {
 std::vector<std::array<int, 3>> aft_mesh_region(NodeStore& nodes, const ScanSurface& surface,
                                                 const RegionMeshInput& input,
                                                 RegionMeshStats& stats);
+
+//! The surface Delaunay refinement mesher of one region (Chew, seed 000 §4.3.4); same
+//! conventions as aft_mesh_region. nullopt: the region has no planar (phi, h) domain.
+std::optional<std::vector<std::array<int, 3>>> delaunay_mesh_region(
+    NodeStore& nodes, const ScanSurface& surface, const RegionMeshInput& input,
+    RegionMeshStats& stats);
 
 }  // namespace scanmesh::aft::detail

@@ -157,7 +157,13 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
       }
     RegionMeshStats st;
     st.region = static_cast<int>(r);
-    const auto t = detail::aft_mesh_region(store, surface, in, st);
+    std::optional<std::vector<std::array<int, 3>>> region_tris;
+    if (reg.mesher == "delaunay") {
+      region_tris = detail::delaunay_mesh_region(store, surface, in, st);
+      if (region_tris) st.mesher = "delaunay";
+    }
+    if (!region_tris) region_tris = detail::aft_mesh_region(store, surface, in, st);
+    const auto& t = *region_tris;
     for (const auto& x : t) {
       tris.push_back(x);
       labels.push_back(static_cast<int>(r));

@@ -35,6 +35,12 @@ struct RegionMeshStats {
   int triangles = 0, steiner_points = 0;
   int chose_new = 0, chose_existing = 0, chose_circumcentre = 0;
   int unmeshed_front_edges = 0;  //!< > 0: the front could not be closed (a failure)
+  //! "aft" or "delaunay" (surface Delaunay refinement); "aft" also when a region asked for
+  //! delaunay but has no planar parameter domain (it winds around the axis).
+  std::string mesher = "aft";
+  //! Delaunay: triangles left non-ideal because their circumcentre was outside the region,
+  //! behind a segment edge or crowding a node (segments are shared and never split).
+  int rejected_circumcentres = 0;
 };
 
 struct AnimationMesh {
