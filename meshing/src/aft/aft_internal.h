@@ -46,8 +46,16 @@ std::vector<std::array<int, 3>> aft_mesh_region(NodeStore& nodes, const ScanSurf
 
 //! The surface Delaunay refinement mesher of one region (Chew, seed 000 §4.3.4); same
 //! conventions as aft_mesh_region. nullopt: the region has no planar (phi, h) domain.
-std::optional<std::vector<std::array<int, 3>>> delaunay_mesh_region(
-    NodeStore& nodes, const ScanSurface& surface, const RegionMeshInput& input,
-    RegionMeshStats& stats);
+std::optional<std::vector<std::array<int, 3>>> delaunay_mesh_region(NodeStore& nodes,
+                                                                    const ScanSurface& surface,
+                                                                    const RegionMeshInput& input,
+                                                                    RegionMeshStats& stats);
+
+//! Two-way sampled Hausdorff distance between the mesh and the scan surface (the surface over
+//! the mesh's (phi, h) footprint), `samples` subdivisions per triangle edge.
+struct TwoWayDistance {
+  double mesh_to_surface_mm = 0, surface_to_mesh_mm = 0;
+};
+TwoWayDistance sampled_hausdorff(const AnimationMesh& am, const ScanSurface& surface, int samples);
 
 }  // namespace scanmesh::aft::detail

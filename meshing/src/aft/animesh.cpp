@@ -286,27 +286,6 @@ std::string AnimationMeshQuality::to_text() const {
   return os.str();
 }
 
-namespace {
-double point_triangle_distance(const Vector3d& p, const Vector3d& a, const Vector3d& b,
-                               const Vector3d& c) {
-  const Vector3d n = (b - a).cross(c - a);
-  const double nn = n.squaredNorm();
-  if (nn > 0) {
-    const Vector3d q = p - n * ((p - a).dot(n) / nn);
-    const double u = (b - q).cross(c - q).dot(n), v = (c - q).cross(a - q).dot(n),
-                 w = (a - q).cross(b - q).dot(n);
-    if (u >= 0 && v >= 0 && w >= 0) return (p - q).norm();
-  }
-  auto seg = [&](const Vector3d& x, const Vector3d& y) {
-    const Vector3d d = y - x;
-    const double t =
-        d.squaredNorm() > 0 ? std::clamp((p - x).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
-    return (x + t * d - p).norm();
-  };
-  return std::min({seg(a, b), seg(b, c), seg(c, a)});
-}
-}  // namespace
-
 AnimationMeshQuality evaluate_quality(const AnimationMesh& am, const ScanSurface& surface,
                                       int samples) {
   AnimationMeshQuality q;
@@ -366,47 +345,10 @@ AnimationMeshQuality evaluate_quality(const AnimationMesh& am, const ScanSurface
   for (const Vector3d& p : P)
     if (const auto pr = surface.project(p))
       q.max_vertex_offset_mm = std::max(q.max_vertex_offset_mm, pr->distance);
-  // Two-way sampled Hausdorff: points on each triangle projected onto the surface, and surface
-  // points over each triangle's (phi, h) footprint measured to that triangle and its neighbours.
-  std::unordered_map<std::uint64_t, std::vector<int>> edge_faces;
-  for (std::size_t t = 0; t < T.size(); ++t)
-    for (int k = 0; k < 3; ++k)
-      edge_faces[ukey(T[t][k], T[t][(k + 1) % 3])].push_back(static_cast<int>(t));
-  const int n = std::max(2, samples);
-  for (std::size_t t = 0; t < T.size(); ++t) {
-    const auto& f = T[t];
-    Vector2d pa = am.params[f[0]], pb = am.params[f[1]], pc = am.params[f[2]];
-    pb.x() = pa.x() + std::remainder(pb.x() - pa.x(), 2 * M_PI);
-    pc.x() = pa.x() + std::remainder(pc.x() - pa.x(), 2 * M_PI);
-    std::vector<int> near{static_cast<int>(t)};
-    for (int k = 0; k < 3; ++k)
-      for (int o : edge_faces[ukey(f[k], f[(k + 1) % 3])])
-        if (o != static_cast<int>(t)) near.push_back(o);
-    for (int i = 0; i <= n; ++i)
-      for (int j = 0; i + j <= n; ++j) {
-        const double u = double(i) / n, v = double(j) / n, w = 1 - u - v;
-        const Vector3d x = w * P[f[0]] + u * P[f[1]] + v * P[f[2]];
-        // Closest-point projection can stop in a far local minimum (e.g. behind an ear); the
-        // radial foot point bounds the true distance from above.
-        double dist = 1e300;
-        if (const auto pr = surface.project(x)) dist = pr->distance;
-        if (const auto im = surface.implicit(x)) dist = std::min(dist, std::fabs(im->value));
-        // The surface point over the sample's (phi, h) is a third upper bound (tight where the
-        // first two fail: near-horizontal parts such as the crown).
-        const Vector2d pp0 = w * pa + u * pb + v * pc;
-        if (const auto y0 = surface.position(pp0.x(), pp0.y()))
-          dist = std::min(dist, (*y0 - x).norm());
-        if (dist < 1e299)
-          q.hausdorff_mesh_to_surface_mm = std::max(q.hausdorff_mesh_to_surface_mm, dist);
-        const Vector2d pp = w * pa + u * pb + v * pc;
-        if (const auto y = surface.position(pp.x(), pp.y())) {
-          double d = 1e300;
-          for (int o : near)
-            d = std::min(d, point_triangle_distance(*y, P[T[o][0]], P[T[o][1]], P[T[o][2]]));
-          q.hausdorff_surface_to_mesh_mm = std::max(q.hausdorff_surface_to_mesh_mm, d);
-        }
-      }
-  }
+  // Two-way sampled Hausdorff with exact distances to triangle sets (surface_distance.cpp).
+  const detail::TwoWayDistance d = detail::sampled_hausdorff(am, surface, samples);
+  q.hausdorff_mesh_to_surface_mm = d.mesh_to_surface_mm;
+  q.hausdorff_surface_to_mesh_mm = d.surface_to_mesh_mm;
   return q;
 }
 
