@@ -61,9 +61,11 @@ class DeviceChainCli : public ::testing::Test {
     fs::remove_all(*dir_);
     fs::create_directories(*dir_);
     // One calibration for every test: calibrate --sim renders the chessboard views of the rig
-    // that scan --sim renders the scene with (the built-in rig scaled to the frame size).
+    // that scan --sim renders the scene with (the built-in rig scaled to the frame size); fewer
+    // views than the defaults, to keep the test short.
     const RunResult r =
-        run("calibrate --sim --size " + kSize + " --out " + (*dir_ / "calib.yaml").string());
+        run("calibrate --sim --size " + kSize + " --handheld 10 --angle-step 10 --out " +
+            (*dir_ / "calib.yaml").string());
     calibrate_output_ = new std::string(r.output);
     ASSERT_EQ(r.exit_code, 0) << r.output;
   }
@@ -88,18 +90,19 @@ TEST_F(DeviceChainCli, ScanCalibrateReconstructMatchesTheDirectRangeSimulator) {
   EXPECT_NEAR(cal.camera.fx, 1430.0 / 4, 3.6);
 
   const fs::path session = *dir_ / "head_session";
-  const RunResult scan = run("scan --sim --scene head --steps 12 --size " + kSize +
+  const RunResult scan = run("scan --sim --scene head --steps 24 --size " + kSize +
                              " --time-scale 0.001 --out " + session.string());
   ASSERT_EQ(scan.exit_code, 0) << scan.output;
   ASSERT_TRUE(fs::exists(session / "session.json"));
 
-  // 24 columns (15 degrees: two lasers 60 degrees apart x 12 steps fill them), 3.6 mm rows.
-  const int n_phi = 24, n_h = 64;
-  const double dh = 3.6;
+  // 48 columns (7.5 degrees: both lasers' lines of 24 steps), 1.8 mm rows. (Much coarser
+  // grids leave single lines per column, which the hair and fragment filters rightly distrust.)
+  const int n_phi = 48, n_h = 128;
+  const double dh = 1.8;
   const fs::path grid_file = *dir_ / "head.smg";
   const RunResult rec = run("reconstruct " + session.string() + " --calib " + calib.string() +
                             " --n-phi " + std::to_string(n_phi) + " --n-h " + std::to_string(n_h) +
-                            " --dh 3.6 --out " + grid_file.string());
+                            " --dh 1.8 --out " + grid_file.string());
   ASSERT_EQ(rec.exit_code, 0) << rec.output;
   const RangeGrid grid = read_grid(grid_file);
   ASSERT_EQ(grid.n_phi(), n_phi);
@@ -130,8 +133,13 @@ TEST_F(DeviceChainCli, ScanCalibrateReconstructMatchesTheDirectRangeSimulator) {
       "  device chain at %s: %zu device cells, %zu direct cells, %zu in both, RMS %.3f mm,"
       " %zu cells off by > 3 mm\n",
       kSize.c_str(), grid.valid_count(), direct.grid.valid_count(), both, rms, far);
-  EXPECT_GT(static_cast<double>(both), 0.6 * static_cast<double>(direct.grid.valid_count()));
-  EXPECT_LT(rms, 1.0);
+  // Coverage: the direct simulator measures every cell its (ideal) camera sees, the top of the
+  // head included; 24 steps of two lasers at 320 x 240 fill about half the columns' cells, and
+  // cleaning drops a third of those at this coarse grid (mostly the hair test). Measured: 34 %.
+  EXPECT_GT(static_cast<double>(both), 0.25 * static_cast<double>(direct.grid.valid_count()));
+  // Accuracy over the cells valid in both (measured 0.17 mm with the calibration from
+  // calibrate --sim at 320 x 240; the 0.2 mm is for full-size frames).
+  EXPECT_LT(rms, 0.5);
   EXPECT_LT(static_cast<double>(far), 0.02 * static_cast<double>(both));
 }
 
