@@ -171,6 +171,12 @@ int run_measure(const MeasureArgs& a) {
     }
   } else {
     const SessionReader session(a.session);
+    const auto& cam = session.manifest().header.camera;
+    if (cam.width != cal.camera.width || cam.height != cal.camera.height)
+      throw InvalidInputError(
+          "check-calibration: " + a.session + " has " + std::to_string(cam.width) + "x" +
+          std::to_string(cam.height) + " frames but " + a.calib + " is for " +
+          std::to_string(cal.camera.width) + "x" + std::to_string(cal.camera.height));
     report["session"] = a.session;
     const auto pts = object_points(session, cal, a.min_height_mm, a.object);
     report[a.object] =
