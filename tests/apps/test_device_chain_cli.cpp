@@ -154,6 +154,7 @@ TEST_F(DeviceChainCli, CheckCalibrationPassesWithTheCalibration) {
   ASSERT_TRUE(fs::exists(calib)) << *calibrate_output_;
   const fs::path report = *dir_ / "check_good.json";
   const RunResult r = run(kCheck + " --calib " + calib.string() + " --report " + report.string());
+  std::printf("%s", r.output.c_str());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json j = read_json(report);
   EXPECT_TRUE(j["pass"].get<bool>());
@@ -172,23 +173,26 @@ TEST_F(DeviceChainCli, CheckCalibrationPassesWithTheCalibration) {
 TEST_F(DeviceChainCli, CheckCalibrationFailsWithATiltedLaserPlane) {
   const fs::path calib = *dir_ / "calib.yaml";
   ASSERT_TRUE(fs::exists(calib)) << *calibrate_output_;
-  // Tilt the first laser's plane by 1 degree about a horizontal line through its point nearest
+  // Tilt the first laser's plane by 2 degrees about a horizontal line through its point nearest
   // the camera: the kind of error a knocked laser module makes.
   Calibration cal = Calibration::read_yaml(calib);
   LaserPlane& l = cal.lasers.at(0);
   const Eigen::Vector3d p0 = l.normal * l.distance_mm;
   const Eigen::Vector3d axis = l.normal.cross(cal.axis_direction).normalized();
-  l.normal = Eigen::AngleAxisd(std::numbers::pi / 180.0, axis) * l.normal;
+  l.normal = Eigen::AngleAxisd(2.0 * std::numbers::pi / 180.0, axis) * l.normal;
   l.distance_mm = l.normal.dot(p0);
   const fs::path bad = *dir_ / "calib_tilted.yaml";
   cal.write_yaml(bad);
   const fs::path report = *dir_ / "check_bad.json";
   const RunResult r = run(kCheck + " --calib " + bad.string() + " --report " + report.string());
+  std::printf("%s", r.output.c_str());
   EXPECT_EQ(r.exit_code, 8) << r.output;
   EXPECT_NE(r.output.find("FAIL"), std::string::npos) << r.output;
   const nlohmann::json j = read_json(report);
   EXPECT_FALSE(j["pass"].get<bool>());
   EXPECT_FALSE(j["failures"].empty());
+  // The tilted plane's laser disagrees with the other one: the sphere is measured wrong.
+  EXPECT_GT(std::abs(j["sphere"]["radius_error_mm"].get<double>()), 0.25);
 }
 
 TEST(CheckCalibrationCli, UsageErrors) {
