@@ -171,9 +171,9 @@ RangeGrid assemble_grid(const std::vector<TriangulatedPoint>& points, const Grid
   return grid;
 }
 
-RangeGrid reconstruct_grid(const ScanStepSource& source, const Calibration& cal,
-                           const ReconstructionOptions& o, ReconstructionStats* stats,
-                           const std::function<void(std::size_t, std::size_t)>& progress) {
+std::vector<TriangulatedPoint> triangulate_scan(
+    const ScanStepSource& source, const Calibration& cal, const LineExtractionOptions& lo,
+    ReconstructionStats* stats, const std::function<void(std::size_t, std::size_t)>& progress) {
   if (source.laser_count() > static_cast<int>(cal.lasers.size()))
     throw InvalidInputError("reconstruction: the scan has " + std::to_string(source.laser_count()) +
                             " lasers but the calibration only " +
@@ -185,7 +185,7 @@ RangeGrid reconstruct_grid(const ScanStepSource& source, const Calibration& cal,
     const ScanStep step = source.step(s);
     for (std::size_t k = 0; k < step.laser_on.size(); ++k) {
       LineExtractionStats ls;
-      const auto peaks = extract_laser_line(step.laser_on[k], step.laser_off, o.line, &ls);
+      const auto peaks = extract_laser_line(step.laser_on[k], step.laser_off, lo, &ls);
       st.line.rows += ls.rows;
       st.line.peaks += ls.peaks;
       st.line.rejected_weak += ls.rejected_weak;
@@ -199,6 +199,17 @@ RangeGrid reconstruct_grid(const ScanStepSource& source, const Calibration& cal,
     ++st.steps;
     if (progress) progress(s + 1, n);
   }
+  if (stats) *stats = st;
+  return points;
+}
+
+RangeGrid reconstruct_grid(const ScanStepSource& source, const Calibration& cal,
+                           const ReconstructionOptions& o, ReconstructionStats* stats,
+                           const std::function<void(std::size_t, std::size_t)>& progress) {
+  ReconstructionStats st;
+  const std::vector<TriangulatedPoint> points =
+      triangulate_scan(source, cal, o.line, &st, progress);
+  const std::size_t n = source.step_count();
   RangeGrid grid = assemble_grid(points, o.grid, &st.grid);
   grid.metadata["source"] = "laser scan";
   grid.metadata["steps"] = std::to_string(n);

@@ -17,6 +17,7 @@ enum ExitCode : int {
   kIoFailure = 5,        //!< the OS refused a read or write (missing file, disk full, ...)
   kNotEdgeManifold = 6,  //!< `scanmesh check`: the mesh has an edge with more than two faces
   kDeviceFailure = 7,    //!< a camera or board failed, vanished, stalled or answered nonsense
+  kOutOfTolerance = 8,   //!< `scanmesh check-calibration`: a measured error exceeds its tolerance
 };
 
 //! Runs a command; maps scanmesh's typed errors to an exit code and one line on stderr.

@@ -104,7 +104,42 @@ nlohmann::json drop_counts(const sim::SimulatedScan& scan) {
 
 }  // namespace
 
+GridProducts write_grid_products(const std::filesystem::path& out, const RangeGrid& grid,
+                                 const GridMeshOptions& meshing, nlohmann::json& timings) {
+  GridProducts p;
+  Stopwatch t;
+  p.meshed = grid_mesh(grid, meshing);
+  timings["grid_mesh_s"] = t.seconds();
+  p.mesh_json = {{"options", to_json(meshing)},
+                 {"quads_meshed", p.meshed.quads_meshed},
+                 {"quads_skipped_for_holes", p.meshed.quads_skipped_for_holes},
+                 {"quads_skipped_for_depth_jumps", p.meshed.quads_skipped_for_depth_jumps},
+                 {"mesh", mesh_summary(p.meshed.mesh)}};
+
+  t = {};
+  export_texture_png(out / "texture.png", grid);
+  export_depth_png(out / "depth.png", grid);
+  export_pcd(out / "scan.pcd", grid);
+  write_mesh_files(out / "mesh.ply", out / "mesh.obj", p.meshed.mesh, "texture.png");
+  timings["write_files_s"] = t.seconds();
+
+  t = {};
+  p.fields = compute_fields_grid_quadric(grid);
+  timings["curvature_s"] = t.seconds();
+  write_fields(out / "fields.smf", p.fields);
+  std::vector<float> mean(p.fields.size());
+  for (std::size_t k = 0; k < p.fields.size(); ++k) mean[k] = p.fields.mean(k);
+  write_png(out / "curvature.png",
+            diverging_map(mean, p.fields.defined, grid.n_phi(), grid.n_h(), "H [1/mm]"));
+
+  t = {};
+  write_png(out / "render.png", render_views(p.meshed.mesh));
+  timings["render_s"] = t.seconds();
+  return p;
+}
+
 int run_demo(const DemoArgs& args) {
+  if (args.device.enabled) return run_device_demo(args);
   const std::filesystem::path out(args.out);
   ensure_directory(out);
   nlohmann::json timings;
@@ -127,29 +162,9 @@ int run_demo(const DemoArgs& args) {
   grid.metadata["cleaned"] = "spikes and fragments removed";
   write_grid(out / "scan.smg", grid);
 
-  t = {};
-  const GridMesh meshed = grid_mesh(grid, args.meshing);
-  timings["grid_mesh_s"] = t.seconds();
-
-  t = {};
-  export_texture_png(out / "texture.png", grid);
-  export_depth_png(out / "depth.png", grid);
-  export_pcd(out / "scan.pcd", grid);
-  write_mesh_files(out / "mesh.ply", out / "mesh.obj", meshed.mesh, "texture.png");
-  timings["write_files_s"] = t.seconds();
-
-  t = {};
-  const SurfaceFields fields = compute_fields_grid_quadric(grid);
-  timings["curvature_s"] = t.seconds();
-  write_fields(out / "fields.smf", fields);
-  std::vector<float> mean(fields.size());
-  for (std::size_t k = 0; k < fields.size(); ++k) mean[k] = fields.mean(k);
-  write_png(out / "curvature.png",
-            diverging_map(mean, fields.defined, grid.n_phi(), grid.n_h(), "H [1/mm]"));
-
-  t = {};
-  write_png(out / "render.png", render_views(meshed.mesh));
-  timings["render_s"] = t.seconds();
+  const GridProducts products = write_grid_products(out, grid, args.meshing, timings);
+  const GridMesh& meshed = products.meshed;
+  const SurfaceFields& fields = products.fields;
   timings["total_s"] = total.seconds();
 
   const nlohmann::json report = {
@@ -159,12 +174,7 @@ int run_demo(const DemoArgs& args) {
       {"dropouts", drop_counts(scan)},
       {"cleaning", {{"options", to_json(args.cleaning)}, {"result", to_json(cleaning)}}},
       {"accuracy_vs_ground_truth", accuracy_against_truth(scan.grid, grid, scan, scene)},
-      {"grid_mesh",
-       {{"options", to_json(args.meshing)},
-        {"quads_meshed", meshed.quads_meshed},
-        {"quads_skipped_for_holes", meshed.quads_skipped_for_holes},
-        {"quads_skipped_for_depth_jumps", meshed.quads_skipped_for_depth_jumps},
-        {"mesh", mesh_summary(meshed.mesh)}}},
+      {"grid_mesh", products.mesh_json},
       {"curvature", curvature_against_truth(fields, scan, scene)},
       {"timings", timings},
       {"versions", versions()},

@@ -380,4 +380,15 @@ void register_devices_commands(CLI::App& app, CommandList& commands) {
   commands.push_back({replay, [r] { return run_replay(*r); }});
 }
 
+int run_sim_scan(const SimScanRequest& r) {
+  ScanArgs a;
+  a.sim = true;
+  a.scene = r.scene;
+  a.out = r.out;
+  a.steps = r.steps;
+  a.size = r.size;
+  a.time_scale = r.time_scale;
+  return run_scan(a);
+}
+
 }  // namespace scanmesh::cli

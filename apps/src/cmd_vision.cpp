@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <tuple>
 
 #include "cli_support.h"
 #include "commands.h"
@@ -14,6 +15,7 @@
 #include "scanmesh/core/errors.h"
 #include "scanmesh/core/grid_file.h"
 #include "scanmesh/sim/turntable_camera.h"
+#include "sim_rig.h"
 #include "sim_step_source.h"
 
 namespace scanmesh::cli {
@@ -28,6 +30,7 @@ sim::RigConfig load_rig(const std::string& path) {
 struct CalibrateArgs {
   bool sim = false;
   std::string rig, out;
+  std::string size;  //!< simulated frame size (the built-in rig scaled); empty: the rig's
   int handheld = 16;
   double angle_step_deg = 5.0, angle_max_deg = 70.0;
 };
@@ -37,7 +40,10 @@ int run_calibrate(const CalibrateArgs& a) {
     throw InvalidInputError(
         "calibrate: only --sim is available on this branch (session folders come with the "
         "devices branch)");
-  const sim::RigConfig rig = load_rig(a.rig);
+  if (!a.size.empty() && !a.rig.empty())
+    throw InvalidInputError("calibrate: give --rig or --size, not both");
+  const sim::RigConfig rig =
+      a.size.empty() ? load_rig(a.rig) : std::apply(scaled_ciclop_rig, parse_frame_size(a.size));
   // The pattern mode renders only the board and the platter; the scene is unused.
   const sim::Scene unused = sim::Scene::from_yaml_text(
       "objects:\n  - {type: sphere, name: unused, center: [0, 0, -1000], radius: 1}\n", "unused");
@@ -129,6 +135,8 @@ void register_vision_commands(CLI::App& app, CommandList& commands) {
   cal_cmd->add_flag("--sim", cal->sim, "Render the calibration views with the simulated camera");
   cal_cmd->add_option("--rig", cal->rig, "Simulated rig YAML (default: built-in Ciclop-like)")
       ->check(CLI::ExistingFile);
+  cal_cmd->add_option("--size", cal->size,
+                      "Simulated frame size WIDTHxHEIGHT (the built-in rig scaled, as scan --sim)");
   cal_cmd->add_option("--handheld", cal->handheld, "Hand-held board views")
       ->capture_default_str()
       ->check(CLI::Range(0, 100));
@@ -191,6 +199,14 @@ void register_vision_commands(CLI::App& app, CommandList& commands) {
          const SimulatedStepSource source(camera, static_cast<std::size_t>(rec->steps));
          return run_reconstruct_from(source, rec->common);
        }});
+}
+
+int run_sim_calibrate(const std::string& size, const std::string& out) {
+  CalibrateArgs a;
+  a.sim = true;
+  a.size = size;
+  a.out = out;
+  return run_calibrate(a);
 }
 
 }  // namespace scanmesh::cli

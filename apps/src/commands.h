@@ -78,14 +78,29 @@ struct CurvatureArgs {
 };
 int run_curvature(const CurvatureArgs& args);
 
+//! `demo --device-sim`: the device path instead of the direct range simulator
+//! (apps/src/cmd_device_demo.cpp).
+struct DeviceDemoArgs {
+  bool enabled = false;
+  int steps = 90;
+  std::string size = "640x480";
+  int n_phi = 180, n_h = 256;
+  double h0_mm = 0.0, dh_mm = 0.9;
+  double time_scale = 0.001;
+};
+
 struct DemoArgs {
   std::string out = "scanmesh-demo";
+  DeviceDemoArgs device;
   std::string scene, scanner;
   std::optional<std::uint64_t> seed;
   CleaningOptions cleaning;
   GridMeshOptions meshing;
 };
 int run_demo(const DemoArgs& args);
+//! Adds --device-sim and its options to the demo subcommand.
+void add_device_demo_options(CLI::App& demo, DeviceDemoArgs& args);
+int run_device_demo(const DemoArgs& args);
 
 }  // namespace scanmesh::cli
 
@@ -143,12 +158,26 @@ struct ReconstructArgs {
 //! Reconstructs a grid from any step source (simulated or a recorded session).
 int run_reconstruct_from(const ScanStepSource& source, const ReconstructArgs& args);
 void register_vision_commands(CLI::App& app, CommandList& commands);
+//! `calibrate --sim --size SIZE --out OUT` as the command runs it.
+int run_sim_calibrate(const std::string& size, const std::string& out);
 
 }  // namespace scanmesh::cli
 
 // --- devices, scan sessions and replay: apps/src/cmd_devices.cpp ---
 namespace scanmesh::cli {
 void register_devices_commands(CLI::App& app, CommandList& commands);
+//! `scan --sim --scene SCENE --steps N --size WxH --time-scale T --out OUT` as the command runs it.
+struct SimScanRequest {
+  std::string scene = "head", out, size = "640x480";
+  int steps = 90;
+  double time_scale = 0.001;
+};
+int run_sim_scan(const SimScanRequest& request);
+}  // namespace scanmesh::cli
+
+// --- check-calibration: re-measure known spheres: apps/src/cmd_measure.cpp ---
+namespace scanmesh::cli {
+void register_measure_commands(CLI::App& app, CommandList& commands);
 }  // namespace scanmesh::cli
 
 // --- animation meshes (seed 000): apps/src/cmd_aft.cpp ---

@@ -182,6 +182,7 @@ int main(int argc, char** argv) {
   demo_cmd->add_option("--seed", demo.seed, "Random seed of all defects");
   add_cleaning_options(*demo_cmd, demo.cleaning);
   add_mesh_options(*demo_cmd, demo.meshing);
+  add_device_demo_options(*demo_cmd, demo.device);
 
   // Stages added later register their subcommands here, one line each (commands.h).
   CommandList commands;
@@ -189,6 +190,7 @@ int main(int argc, char** argv) {
   register_devices_commands(app, commands);
   register_aft_commands(app, commands);
   register_remesh_commands(app, commands);
+  register_measure_commands(app, commands);
 
   try {
     app.parse(argc, argv);

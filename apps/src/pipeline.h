@@ -11,6 +11,7 @@
 #include "scanmesh/core/range_grid.h"
 #include "scanmesh/core/render.h"
 #include "scanmesh/meshing/grid_mesh.h"
+#include "scanmesh/reconstruction/surface_fields.h"
 #include "scanmesh/sim/range_scanner.h"
 
 namespace scanmesh::cli {
@@ -39,6 +40,18 @@ nlohmann::json to_json(const GridMeshOptions& o);
 nlohmann::json grid_summary(const RangeGrid& grid);
 nlohmann::json mesh_summary(const Mesh& mesh);
 nlohmann::json versions();
+
+//! What the demo makes of a cleaned grid (apps/src/cmd_demo.cpp): the grid mesh and its files
+//! (texture.png, depth.png, scan.pcd, mesh.ply, mesh.obj, mesh.mtl, fields.smf, curvature.png,
+//! render.png) in `out`; stage times are added to `timings`. Shared by `demo` and
+//! `demo --device-sim`.
+struct GridProducts {
+  GridMesh meshed;
+  SurfaceFields fields;
+  nlohmann::json mesh_json;  //!< report.json's "grid_mesh"
+};
+GridProducts write_grid_products(const std::filesystem::path& out, const RangeGrid& grid,
+                                 const GridMeshOptions& meshing, nlohmann::json& timings);
 
 //! Creates the directory (and parents). Throws IoError naming it on failure.
 void ensure_directory(const std::filesystem::path& dir);

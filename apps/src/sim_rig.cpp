@@ -1,6 +1,7 @@
 #include "sim_rig.h"
 
 #include <chrono>
+#include <cstdio>
 #include <thread>
 
 #include "scanmesh/core/errors.h"
@@ -49,13 +50,16 @@ void apply_sim_fault(const std::string& spec, sim::SimBoardOptions& board,
                             "camera-eio, camera-unplug)");
 }
 
-sim::FrameRenderer make_sim_renderer(const std::string& scene, int width, int height) {
-  // Without a scene the synthetic renderer stays the default: it is fast and its frames are what
-  // the session and kill/resume tests compare bit for bit.
-  if (scene.empty()) return sim::synthetic_turntable_renderer(width, height);
-  auto world = std::make_shared<sim::Scene>(scene == "head" ? sim::builtin_head_scene()
-                                                            : sim::Scene::from_yaml_file(scene));
-  // The built-in Ciclop rig at the requested frame size: intrinsics scale with the sensor.
+std::pair<int, int> parse_frame_size(const std::string& s) {
+  int w = 0, h = 0;
+  char tail = 0;
+  if (std::sscanf(s.c_str(), "%dx%d%c", &w, &h, &tail) != 2 || w < 8 || h < 8 || w > 8192 ||
+      h > 8192 || w % 2 != 0)
+    throw InvalidInputError("--size '" + s + "' must be WIDTHxHEIGHT (even width, 8..8192)");
+  return {w, h};
+}
+
+sim::RigConfig scaled_ciclop_rig(int width, int height) {
   sim::RigConfig rig = sim::builtin_ciclop_rig();
   const double sx = static_cast<double>(width) / rig.width;
   const double sy = static_cast<double>(height) / rig.height;
@@ -65,6 +69,16 @@ sim::FrameRenderer make_sim_renderer(const std::string& scene, int width, int he
   rig.intrinsics.cy = (rig.intrinsics.cy + 0.5) * sy - 0.5;
   rig.width = width;
   rig.height = height;
+  return rig;
+}
+
+sim::FrameRenderer make_sim_renderer(const std::string& scene, int width, int height) {
+  // Without a scene the synthetic renderer stays the default: it is fast and its frames are what
+  // the session and kill/resume tests compare bit for bit.
+  if (scene.empty()) return sim::synthetic_turntable_renderer(width, height);
+  auto world = std::make_shared<sim::Scene>(scene == "head" ? sim::builtin_head_scene()
+                                                            : sim::Scene::from_yaml_file(scene));
+  const sim::RigConfig rig = scaled_ciclop_rig(width, height);
   auto camera = std::make_shared<sim::TurntableCamera>(*world, rig);
   // The closure owns the scene and the camera (which keeps a reference to the scene).
   return [world, camera](double angle_rad, unsigned laser_mask) {

@@ -6,11 +6,13 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "scanmesh/drivers/camera.h"
 #include "scanmesh/sim/pty_board.h"
 #include "scanmesh/sim/sim_camera.h"
+#include "scanmesh/sim/turntable_camera.h"
 
 namespace scanmesh::cli {
 
@@ -18,6 +20,14 @@ namespace scanmesh::cli {
 //! "camera-eio@12". Throws InvalidInputError for an unknown kind.
 void apply_sim_fault(const std::string& spec, sim::SimBoardOptions& board,
                      sim::SimCameraOptions& camera);
+
+//! "WIDTHxHEIGHT" (even width, 8..8192 each) -> (width, height); throws InvalidInputError.
+std::pair<int, int> parse_frame_size(const std::string& size);
+
+//! The built-in Ciclop rig at another frame size: the intrinsics scale with the sensor (the same
+//! lens on a smaller sensor readout). `scan --sim --scene`, `calibrate --sim --size` and the
+//! device demo all use this, so a session and its calibration describe the same camera.
+sim::RigConfig scaled_ciclop_rig(int width, int height);
 
 //! The frame renderer of the simulation. `scene` empty: the synthetic turntable renderer.
 //! (The scene renderer sim::TurntableCamera plugs in here.)

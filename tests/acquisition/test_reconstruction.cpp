@@ -10,6 +10,7 @@
 
 #include "scanmesh/acquisition/reconstruction.h"
 #include "scanmesh/acquisition/scan_cleaning.h"
+#include "scanmesh/acquisition/sphere_fit.h"
 #include "scanmesh/core/errors.h"
 #include "scanmesh/sim/range_scanner.h"
 #include "scanmesh/sim/turntable_camera.h"
@@ -80,43 +81,6 @@ std::vector<TriangulatedPoint> scan_points(const sim::TurntableCamera& cam, std:
   return pts;
 }
 
-struct SphereFit {
-  Eigen::Vector3d centre;
-  double radius = 0, rms = 0;
-  int n = 0;
-};
-
-// Algebraic fit, then Gauss-Newton on the geometric distances.
-SphereFit fit_sphere(const std::vector<Eigen::Vector3d>& p) {
-  Eigen::MatrixXd a(p.size(), 4);
-  Eigen::VectorXd b(p.size());
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    a.row(i) << 2 * p[i].x(), 2 * p[i].y(), 2 * p[i].z(), 1.0;
-    b(i) = p[i].squaredNorm();
-  }
-  const Eigen::Vector4d s = a.colPivHouseholderQr().solve(b);
-  Eigen::Vector3d c = s.head<3>();
-  double r = std::sqrt(s(3) + c.squaredNorm());
-  for (int it = 0; it < 20; ++it) {
-    Eigen::MatrixXd j(p.size(), 4);
-    Eigen::VectorXd res(p.size());
-    for (std::size_t i = 0; i < p.size(); ++i) {
-      const Eigen::Vector3d d = p[i] - c;
-      const double n = d.norm();
-      res(i) = n - r;
-      j.row(i) << -d.x() / n, -d.y() / n, -d.z() / n, -1.0;
-    }
-    const Eigen::Vector4d step = j.colPivHouseholderQr().solve(-res);
-    c += step.head<3>();
-    r += step(3);
-  }
-  SphereFit f{c, r, 0, static_cast<int>(p.size())};
-  double ss = 0;
-  for (const auto& q : p) ss += std::pow((q - c).norm() - r, 2);
-  f.rms = std::sqrt(ss / p.size());
-  return f;
-}
-
 sim::Scene scene_from(const std::string& objects) {
   return sim::Scene::from_yaml_text(
       "objects:\n" + objects + "texture: {seed: 3, base_color: [200, 200, 200]}\n", "test scene");
@@ -134,9 +98,9 @@ TEST(DevicePath, SphereProbing) {
     if (p.p.z() > 1.0) on.push_back(p.p);
   const SphereFit f = fit_sphere(on);
   std::printf(
-      "  sphere: %d points, radius %.4f mm (true 50), centre (%.3f %.3f %.3f), RMS %.4f mm\n", f.n,
-      f.radius, f.centre.x(), f.centre.y(), f.centre.z(), f.rms);
-  EXPECT_GT(f.n, 15000);
+      "  sphere: %zu points, radius %.4f mm (true 50), centre (%.3f %.3f %.3f), RMS %.4f mm\n",
+      f.points, f.radius, f.centre.x(), f.centre.y(), f.centre.z(), f.rms);
+  EXPECT_GT(f.points, 15000u);
   EXPECT_NEAR(f.radius, 50.0, 0.05);
   EXPECT_LT(f.rms, 0.1);
   EXPECT_LT((f.centre - Eigen::Vector3d(0, 0, 70)).norm(), 0.1);
@@ -183,8 +147,8 @@ TEST(DevicePath, DumbbellSpacing) {
   std::printf(
       "  dumbbell: radii %.4f %.4f mm (true 25), spacing %.4f mm (true 90), RMS %.4f %.4f mm\n",
       fa.radius, fb.radius, spacing, fa.rms, fb.rms);
-  EXPECT_GT(fa.n, 1500);
-  EXPECT_GT(fb.n, 1500);
+  EXPECT_GT(fa.points, 1500u);
+  EXPECT_GT(fb.points, 1500u);
   EXPECT_NEAR(spacing, 90.0, 0.1);
   EXPECT_NEAR(fa.radius, 25.0, 0.05);
   EXPECT_NEAR(fb.radius, 25.0, 0.05);

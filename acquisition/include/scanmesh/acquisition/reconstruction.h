@@ -65,6 +65,15 @@ struct ReconstructionStats {
   GridAssemblyStats grid;
 };
 
+//! Extraction and triangulation of every step and laser of a source (the first half of
+//! reconstruct_grid): the object-frame points, before grid assembly. Fills stats' steps, peaks
+//! and line counts. Throws InvalidInputError when the source's laser count exceeds the
+//! calibration's.
+std::vector<TriangulatedPoint> triangulate_scan(
+    const ScanStepSource& source, const Calibration& calibration,
+    const LineExtractionOptions& options = {}, ReconstructionStats* stats = nullptr,
+    const std::function<void(std::size_t, std::size_t)>& progress = {});
+
 //! The whole path for a step source: extract, triangulate, assemble. `progress(done, total)`
 //! may be empty. Throws InvalidInputError when the source's laser count exceeds the
 //! calibration's.
