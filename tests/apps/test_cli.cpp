@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "cli_runner.h"
 #include "scanmesh/core/grid_file.h"
 #include "scanmesh/core/image.h"
 
@@ -21,24 +22,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const fs::path kBinary = fs::path(SCANMESH_BINARY_DIR) / "apps" / "scanmesh";
-
-struct RunResult {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr together
-};
-
-RunResult run(const std::string& args) {
-  const std::string command = kBinary.string() + " " + args + " 2>&1";
-  RunResult result;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return result;
-  std::array<char, 4096> buffer{};
-  while (std::fgets(buffer.data(), buffer.size(), pipe)) result.output += buffer.data();
-  const int status = pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
+using test::run;
+using test::RunResult;
 
 // One scratch folder per test process, removed when the process exits (ctest runs each test in
 // its own process, so leftovers of earlier runs never accumulate in /tmp).

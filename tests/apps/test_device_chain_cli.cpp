@@ -17,6 +17,7 @@
 #include <numbers>
 #include <string>
 
+#include "cli_runner.h"
 #include "scanmesh/acquisition/calibration.h"
 #include "scanmesh/core/grid_file.h"
 #include "scanmesh/sim/range_scanner.h"
@@ -27,26 +28,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const fs::path kBinary = fs::path(SCANMESH_BINARY_DIR) / "apps" / "scanmesh";
 // 320 x 240 frames (fx 358 px, 1.1 mm per pixel at the axis): small enough for a test, the
 // 11 x 6 chessboard is still found in most calibration views.
 const std::string kSize = "320x240";
 
-struct RunResult {
-  int exit_code = -1;
-  std::string output;
-};
-
-RunResult run(const std::string& args) {
-  RunResult result;
-  FILE* pipe = popen((kBinary.string() + " " + args + " 2>&1").c_str(), "r");
-  if (!pipe) return result;
-  std::array<char, 4096> buffer{};
-  while (std::fgets(buffer.data(), buffer.size(), pipe)) result.output += buffer.data();
-  const int status = pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
+using test::run;
+using test::RunResult;
 
 nlohmann::json read_json(const fs::path& p) {
   std::ifstream in(p);

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "../acquisition/session_compare.h"
+#include "cli_runner.h"
 #include "scanmesh/core/atomic_file.h"
 
 namespace scanmesh {
@@ -24,27 +25,13 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const fs::path kBinary = fs::path(SCANMESH_BINARY_DIR) / "apps" / "scanmesh";
 // 7 steps: 3200 microsteps per turn are not a multiple of 7, so every resume also checks that
 // the table lands on the same microsteps as in an uninterrupted scan (docs/hardware.md).
 const std::string kScan =
     "scan --sim --steps 7 --lasers 2 --size 32x24 --time-scale 0.01 --settle 0.05";
 
-struct RunResult {
-  int exit_code = -1;
-  std::string output;
-};
-
-RunResult run(const std::string& args) {
-  RunResult result;
-  FILE* pipe = popen((kBinary.string() + " " + args + " 2>&1").c_str(), "r");
-  if (!pipe) return result;
-  std::array<char, 4096> buffer{};
-  while (std::fgets(buffer.data(), buffer.size(), pipe)) result.output += buffer.data();
-  const int status = pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
+using test::run;
+using test::RunResult;
 
 // Scratch space in /dev/shm when available (fsync is free there; a SIGKILL does not lose the
 // page cache anyway, so the kill test checks the same thing on either file system).
@@ -194,7 +181,8 @@ TEST_F(ScanCli, KillNineAtFiftyRandomMomentsLosesNothing) {
       const int devnull = ::open("/dev/null", O_WRONLY);
       ::dup2(devnull, 1);
       ::dup2(devnull, 2);
-      execl("/bin/sh", "sh", "-c", ("exec " + kBinary.string() + " " + args).c_str(),
+      execl("/bin/sh", "sh", "-c",
+            ("exec " + test::scanmesh_binary().string() + " " + args).c_str(),
             static_cast<char*>(nullptr));
       _exit(127);
     }
