@@ -126,8 +126,11 @@ class Remesher {
   bool faces_ok(const std::vector<int>& fs) const {
     for (int f : fs)
       if (!face_ok(f)) return false;
-    return true;
+    return locally_embedded(fs);
   }
+  // No changed face intersects a live face at one of its corners: prevents
+  // folds and local self-intersections instead of repairing them afterwards.
+  bool locally_embedded(const std::vector<int>& fs) const;
   std::vector<int> fan(int v, int f) const;  // faces of v's side containing f
   int side_valence(int v, int f) const { return static_cast<int>(fan(v, f).size()) - 1; }
   int deviation(int v, int f) const;  // valence minus optimum (0 for branch)
@@ -141,6 +144,7 @@ class Remesher {
   int flip_delta(int v, int w) const;  // change of R (3.22) by flipping, 1000 if impossible
   bool drive(int b, int w, int side);
   std::array<int, 2> last_flip_{-1, -1};
+  bool try_state(int v, const VState& ns);  // move v to ns if its star stays valid
   bool move_to(int v, const Vec3& x);       // free vertex, 3D target (projected)
   bool move_skeleton(int v, double s_new);  // skeleton vertex, 1D
   bool flip_improves_valence(int v, int w) const;
@@ -152,6 +156,13 @@ class Remesher {
   int flip_pass(bool delaunay);
   void relax_pass(bool angle_based);
   void skeleton_relax_pass();
+  // `passes` x (free vertices: centroidal or angle-based move, skeleton vertices: 1D move).
+  void relax_rounds(int passes, bool angle_based) {
+    for (int k = 0; k < passes; ++k) {
+      relax_pass(angle_based);
+      skeleton_relax_pass();
+    }
+  }
   void skeleton_density_control();
   void adjust_count();
   void regularize();
@@ -343,6 +354,35 @@ bool Remesher::face_ok(int f) const {
   }
   for (int i = 0; i < 3; ++i)
     if (cn[i].dot(cn[(i + 1) % 3]) <= cos_dist_) return false;  // E_dist (3.4)
+  return true;
+}
+
+bool Remesher::locally_embedded(const std::vector<int>& fs) const {
+  std::vector<int> near;
+  for (int f : fs)
+    for (int c : m_.tri[f])
+      for (int g : m_.vfaces[c]) near.push_back(g);
+  std::sort(near.begin(), near.end());
+  near.erase(std::unique(near.begin(), near.end()), near.end());
+  for (int f : fs) {
+    const auto& t = m_.tri[f];
+    Vec3 lo = m_.pos[t[0]], hi = lo;
+    for (int c : t) {
+      lo = lo.cwiseMin(m_.pos[c]);
+      hi = hi.cwiseMax(m_.pos[c]);
+    }
+    for (int h : near) {
+      if (h == f || !m_.face_alive[h]) continue;
+      const auto& u = m_.tri[h];
+      bool apart = false;
+      for (int k = 0; k < 3 && !apart; ++k) {
+        const double a = std::min({m_.pos[u[0]][k], m_.pos[u[1]][k], m_.pos[u[2]][k]});
+        const double b = std::max({m_.pos[u[0]][k], m_.pos[u[1]][k], m_.pos[u[2]][k]});
+        apart = a > hi[k] || b < lo[k];
+      }
+      if (!apart && triangles_intersect(m_.pos, t, u)) return false;
+    }
+  }
   return true;
 }
 
@@ -557,9 +597,9 @@ bool Remesher::flip(int v, int w, bool check) {
   return true;
 }
 
-bool Remesher::move_to(int v, const Vec3& x) {
-  VState ns = vs_[v];
-  project(x, ns.iface, ns.bary);
+bool Remesher::try_state(int v, const VState& ns) {
+  // Shared by every vertex move: apply, check the star (E_dist, E_glatt, no fold or local
+  // intersection), undo on failure.
   const VState old = vs_[v];
   const Vec3 old_pos = m_.pos[v];
   set_state(v, ns);
@@ -573,20 +613,16 @@ bool Remesher::move_to(int v, const Vec3& x) {
   return true;
 }
 
+bool Remesher::move_to(int v, const Vec3& x) {
+  VState ns = vs_[v];
+  project(x, ns.iface, ns.bary);
+  return try_state(v, ns);
+}
+
 bool Remesher::move_skeleton(int v, double s_new) {
-  const VState old = vs_[v];
-  const Vec3 old_pos = m_.pos[v];
-  VState ns = old;
+  VState ns = vs_[v];
   ns.s = s_new;
-  set_state(v, ns);
-  if (!faces_ok(m_.vfaces[v])) {
-    vs_[v] = old;
-    m_.pos[v] = old_pos;
-    ++st_.rejected_error;
-    return false;
-  }
-  ++st_.moves;
-  return true;
+  return try_state(v, ns);
 }
 
 bool Remesher::flip_improves_valence(int v, int w) const { return flip_delta(v, w) < 0; }
@@ -995,10 +1031,13 @@ std::vector<int> Remesher::intersecting_faces() const {
 }
 
 void Remesher::repair_intersections() {
-  // Not in the thesis (it leaves global self-intersections open): faces that cut another face
-  // get Delaunay flips and their free corners pulled to the centroid of their star.
+  // Not in the thesis (it leaves global self-intersections open). Local ones are prevented by
+  // every operation (locally_embedded); what is left here are distant sheets touching. Faces
+  // that cut another face get Delaunay flips and their free corners pulled to the centroid of
+  // their star.
   for (int round = 0; round < 4; ++round) {
     const std::vector<int> bad = intersecting_faces();
+    if (round == 0) st_.intersecting_faces_before_repair = bad.size();
     if (bad.empty()) return;
     for (int f : bad) {
       if (!m_.face_alive[f]) continue;
@@ -1071,10 +1110,7 @@ RemeshResult Remesher::run() {
     collapse_short();
     skeleton_density_control();
     flip_pass(false);
-    for (int k = 0; k < 2; ++k) {
-      relax_pass(false);
-      skeleton_relax_pass();
-    }
+    relax_rounds(2, false);
     // Steer the scale toward the requested count.
     const double ratio = static_cast<double>(m_.vertex_count()) / o_.target_vertices;
     scale_ *= std::pow(ratio, 0.5);
@@ -1085,10 +1121,7 @@ RemeshResult Remesher::run() {
   adjust_count();
   // Area-based remeshing (§3.4): n_step x (n_area moves + Delaunay flips), skeleton control.
   for (int step = 0; step < o_.n_step; ++step) {
-    for (int k = 0; k < o_.n_area; ++k) {
-      relax_pass(false);
-      skeleton_relax_pass();
-    }
+    relax_rounds(o_.n_area, false);
     flip_pass(true);
     skeleton_density_control();
     adjust_count();
@@ -1113,8 +1146,7 @@ RemeshResult Remesher::run() {
     flip_pass(false);
   } else {
     for (int k = 0; k < 5; ++k) {
-      relax_pass(false);
-      skeleton_relax_pass();
+      relax_rounds(1, false);
       flip_pass(true);
       skeleton_density_control();
     }
@@ -1124,8 +1156,7 @@ RemeshResult Remesher::run() {
   t1 = std::chrono::steady_clock::now();
   for (int k = 0; k < o_.smoothing_passes; ++k) {
     report("smooth", static_cast<double>(k) / std::max(1, o_.smoothing_passes));
-    relax_pass(o_.scheme == RemeshScheme::Regularize);
-    skeleton_relax_pass();
+    relax_rounds(1, o_.scheme == RemeshScheme::Regularize);
   }
   repair_intersections();
   st_.seconds_smooth = seconds_since(t1);
