@@ -1,5 +1,7 @@
 // `scanmesh remesh`: seed 001 adaptive remeshing with feature skeleton (docs/remeshing.md).
 #include <CLI/CLI.hpp>
+#include <Eigen/Geometry>
+#include <cmath>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
@@ -35,23 +37,39 @@ struct RemeshArgs {
   int min_component = 0, fill_holes = 0;
   double needle_angle = 0;
   bool remove_spikes = false;
+  double tip_angle = 120.0;
 };
 
 int run_remesh(const RemeshArgs& a) {
   using namespace remeshing;
   PrepareStats ps;
+  const Mesh raw = read_ply(a.mesh);
+  double tip_reach = 0;
+  if (a.remove_spikes) {
+    // The mean edge of a uniform output with the requested count (F ~ 2 V faces).
+    double area = 0;
+    for (const auto& t : raw.triangles)
+      area += 0.5 * (raw.positions[t[1]] - raw.positions[t[0]])
+                        .cross(raw.positions[t[2]] - raw.positions[t[0]])
+                        .norm();
+    tip_reach = std::sqrt(area / (std::sqrt(3.0) / 2 * a.vertices));
+  }
   const PrepareOptions po{.min_component_faces = a.min_component,
                           .max_hole_edges = a.fill_holes,
                           .needle_angle_deg = a.needle_angle,
-                          .remove_spikes = a.remove_spikes};
-  const Mesh input = prepare_input(read_ply(a.mesh), po, &ps);
+                          .remove_spikes = a.remove_spikes,
+                          .tip_reach_mm = tip_reach,
+                          .tip_angle_deg = a.tip_angle};
+  const Mesh input = prepare_input(raw, po, &ps);
   if (a.needle_angle > 0)
     std::cout << "prepare: " << ps.degenerate_removed << " degenerate faces removed, "
               << ps.needles_welded << " needles welded, " << ps.caps_flipped << " caps flipped, "
               << ps.caps_removed << " caps removed\n";
   if (a.remove_spikes)
     std::cout << "prepare: " << ps.spike_faces_removed << " spike faces and "
-              << ps.pinch_faces_removed << " faces at pinch vertices removed\n";
+              << ps.pinch_faces_removed << " faces at pinch vertices and " << ps.tip_faces_removed
+              << " at border tips sharper than " << a.tip_angle << " deg over " << tip_reach
+              << " mm removed\n";
   if (a.min_component > 0 || a.fill_holes > 0)
     std::cout << "prepare: removed " << ps.components_removed << " components (" << ps.faces_removed
               << " faces), closed " << ps.holes_filled << " holes (" << ps.faces_added
@@ -175,6 +193,9 @@ void register_remesh_commands(CLI::App& app, CommandList& commands) {
   c->add_flag("--remove-spikes", args->remove_spikes,
               "Strip one-triangle-wide spikes and strands of a ragged border and the smaller "
               "fans at pinch vertices before remeshing");
+  c->add_option("--tip-angle", args->tip_angle,
+                "With --remove-spikes: border tips sharper than this (deg) over one target edge "
+                "length are removed");
   c->add_option("--out", args->out, "Output directory")->required();
   commands.push_back({c, [args] { return run_remesh(*args); }});
 }

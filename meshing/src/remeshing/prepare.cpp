@@ -185,9 +185,64 @@ void repair_needles(Surface& s, double max_angle_rad, PrepareStats& st) {
   }
 }
 
-void remove_spikes(Surface& s, PrepareStats& st) {
+// Sharp convex tips of the border at scale `reach`: the border is followed `reach` mm back and
+// forward from each boundary vertex; where the surface's angle between the two chords is below
+// `max_angle` the vertex's faces are removed. Returns the number of faces removed.
+std::size_t remove_tips(Surface& s, double reach, double max_angle) {
+  const int nv = static_cast<int>(s.pos.size());
+  std::vector<int> next(nv, -1), prev(nv, -1);
+  for (std::size_t f = 0; f < s.tri.size(); ++f) {
+    if (!s.alive[f]) continue;
+    const auto& t = s.tri[f];
+    for (int i = 0; i < 3; ++i) {
+      const int a = t[i], b = t[(i + 1) % 3];
+      if (s.edge_count(a, b) == 1) {
+        next[a] = b;
+        prev[b] = a;
+      }
+    }
+  }
+  auto walk = [&](int v, const std::vector<int>& step) {
+    int cur = v;
+    double arc = 0;
+    for (int k = 0; k < 1000 && arc < reach; ++k) {
+      const int n = step[cur];
+      if (n < 0 || n == v) break;
+      arc += (s.pos[n] - s.pos[cur]).norm();
+      cur = n;
+    }
+    return cur;
+  };
+  std::vector<int> tips;
+  for (int v = 0; v < nv; ++v) {
+    if (next[v] < 0 || prev[v] < 0) continue;
+    const int f = walk(v, next), b = walk(v, prev);
+    if (f == v || b == v || f == b) continue;
+    Vec3 n = Vec3::Zero();
+    for (int g : s.vf[v])
+      if (s.alive[g]) {
+        const auto& t = s.tri[g];
+        n += (s.pos[t[1]] - s.pos[t[0]]).cross(s.pos[t[2]] - s.pos[t[0]]);
+      }
+    const Vec3 db = s.pos[b] - s.pos[v], df = s.pos[f] - s.pos[v];
+    const double alpha = std::atan2(db.cross(df).norm(), db.dot(df));
+    // Faces lie to the left of the directed border (b -> v -> f): a left turn is convex.
+    const bool convex = (s.pos[v] - s.pos[b]).cross(df).dot(n) > 0;
+    if (convex && alpha < max_angle) tips.push_back(v);
+  }
+  std::size_t removed = 0;
+  for (int v : tips)
+    for (int g : s.vf[v])
+      if (s.alive[g]) {
+        s.kill(g);
+        ++removed;
+      }
+  return removed;
+}
+
+void remove_spikes(Surface& s, double tip_reach, double tip_angle, PrepareStats& st) {
   const int nf = static_cast<int>(s.tri.size());
-  for (int round = 0; round < 20; ++round) {
+  for (int round = 0; round < 100; ++round) {
     // Pinch vertices: keep the largest fan (faces connected across edges at the vertex).
     std::size_t pinched = 0;
     for (int v = 0; v < static_cast<int>(s.pos.size()); ++v) {
@@ -248,7 +303,9 @@ void remove_spikes(Surface& s, PrepareStats& st) {
           if (s.alive[g]) queue.push_back(g);
     }
     st.spike_faces_removed += eaten;
-    if (pinched == 0) break;
+    const std::size_t tipped = tip_reach > 0 ? remove_tips(s, tip_reach, tip_angle) : 0;
+    st.tip_faces_removed += tipped;
+    if (pinched == 0 && tipped == 0) break;
   }
 }
 
@@ -262,7 +319,8 @@ Mesh prepare_input(const Mesh& original, const PrepareOptions& o, PrepareStats* 
     if (o.needle_angle_deg > 0)
       for (int pass = 0; pass < 3; ++pass)
         repair_needles(s, o.needle_angle_deg * std::numbers::pi / 180, st);
-    if (o.remove_spikes) remove_spikes(s, st);
+    if (o.remove_spikes)
+      remove_spikes(s, o.tip_reach_mm, o.tip_angle_deg * std::numbers::pi / 180, st);
     repaired = s.to_mesh();
   }
   const Mesh& in = (o.needle_angle_deg > 0 || o.remove_spikes) ? repaired : original;

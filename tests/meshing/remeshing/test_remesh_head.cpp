@@ -6,6 +6,9 @@
 // the operators, none left for the repair pass), and a Hausdorff distance of about one edge.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+#include <cmath>
+
 #include "scanmesh/acquisition/grid_cleaning.h"
 #include "scanmesh/meshing/grid_mesh.h"
 #include "scanmesh/meshing/mesh_check.h"
@@ -30,24 +33,35 @@ TEST(RemeshHairyHead, CleanUpAndRemeshReachTheCleanHeadQuality) {
   const MeshCheckReport raw_rep = check_mesh(raw, {.self_intersections = false});
   ASSERT_GT(raw_rep.nonmanifold_vertices, 0u);  // the hair border pinches
 
+  const int target = 5000;
+  double area = 0;
+  for (const auto& t : raw.triangles)
+    area += 0.5 * (raw.positions[t[1]] - raw.positions[t[0]])
+                      .cross(raw.positions[t[2]] - raw.positions[t[0]])
+                      .norm();
+  const double edge = std::sqrt(area / (std::sqrt(3.0) / 2 * target));  // as scanmesh remesh
   PrepareStats ps;
   const Mesh in = prepare_input(raw,
                                 {.min_component_faces = 250,
                                  .max_hole_edges = 50,
                                  .needle_angle_deg = 5,
-                                 .remove_spikes = true},
+                                 .remove_spikes = true,
+                                 .tip_reach_mm = edge},
                                 &ps);
   EXPECT_GT(ps.spike_faces_removed, 0u);
   EXPECT_GT(ps.pinch_faces_removed, 0u);
+  EXPECT_GT(ps.tip_faces_removed, 0u);
+  // The clean-up takes the ragged border only: at most 10 % of the faces.
+  EXPECT_GT(in.triangles.size(), raw.triangles.size() * 9 / 10);
   const MeshCheckReport in_rep = check_mesh(in, {.self_intersections = false});
   EXPECT_EQ(in_rep.nonmanifold_vertices, 0u);
   EXPECT_LT(in_rep.topology.boundary_loops, raw_rep.topology.boundary_loops / 4);
 
   RemeshOptions o;
-  o.target_vertices = 5000;
+  o.target_vertices = target;
   o.density.gamma = 0;
   const RemeshResult r = remesh(in, o);
-  EXPECT_EQ(r.stats.output_vertices, 5000);
+  EXPECT_EQ(r.stats.output_vertices, target);
   const RemeshQuality q = evaluate_remesh(in, r, true);
   std::printf(
       "hairy head (%zu input faces): %.2f %% >= 30 deg (branch %zu, boundary %zu, "

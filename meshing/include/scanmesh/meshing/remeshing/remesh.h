@@ -53,11 +53,17 @@ struct PrepareOptions {
   //! boundary edges are removed until none is left, and at a pinch vertex (several face fans
   //! touching at one point) all but the largest fan are removed.
   bool remove_spikes = false;
+  //! With remove_spikes: the border is also followed tip_reach_mm back and forward from each
+  //! boundary vertex, and where the surface's angle between those chords is below tip_angle_deg
+  //! (a sharp convex tip at the scale of the output edges, which no good triangle fits) the
+  //! vertex's faces are removed, repeatedly. 0: off. `scanmesh remesh` uses the target edge.
+  double tip_reach_mm = 0;
+  double tip_angle_deg = 120;
 };
 struct PrepareStats {
   std::size_t components_removed = 0, faces_removed = 0, holes_filled = 0, faces_added = 0;
   std::size_t degenerate_removed = 0, needles_welded = 0, caps_flipped = 0, caps_removed = 0;
-  std::size_t spike_faces_removed = 0, pinch_faces_removed = 0;
+  std::size_t spike_faces_removed = 0, pinch_faces_removed = 0, tip_faces_removed = 0;
 };
 //! Returns the cleaned mesh (labels kept; a hole's fan takes the label of its rim faces).
 Mesh prepare_input(const Mesh& input, const PrepareOptions& options, PrepareStats* stats = nullptr);
