@@ -38,6 +38,7 @@ struct RemeshArgs {
   double needle_angle = 0;
   bool remove_spikes = false;
   double tip_angle = 120.0;
+  bool queue = false;
 };
 
 int run_remesh(const RemeshArgs& a) {
@@ -92,6 +93,7 @@ int run_remesh(const RemeshArgs& a) {
   o.density.clip = a.clip;
   o.theta_dist_deg = a.theta_dist;
   o.skeleton.kink_angle_deg = a.kink_deg;
+  o.regularize_queue = a.queue;
   o.skeleton.kink_reach_mm = a.kink_reach;
   o.theta_glatt_deg = a.theta_glatt;
   if (a.features == "auto") {
@@ -193,6 +195,8 @@ void register_remesh_commands(CLI::App& app, CommandList& commands) {
   c->add_flag("--remove-spikes", args->remove_spikes,
               "Strip one-triangle-wide spikes and strands of a ragged border and the smaller "
               "fans at pinch vertices before remeshing");
+  c->add_flag("--regularize-queue", args->queue,
+              "Regularisation flips from a priority queue, worst valence deviation first");
   c->add_option("--tip-angle", args->tip_angle,
                 "With --remove-spikes: border tips sharper than this (deg) over one target edge "
                 "length are removed");

@@ -154,6 +154,8 @@ class Remesher {
   void split_long();
   void collapse_short();
   int flip_pass(bool delaunay);
+  int flip_queue();  // simple-edge flips, worst valence deviation first
+  int simple_flips() { return o_.regularize_queue ? flip_queue() : flip_pass(false); }
   void relax_pass(bool angle_based);
   void skeleton_relax_pass();
   // `passes` x (free vertices: centroidal or angle-based move, skeleton vertices: 1D move).
@@ -927,10 +929,56 @@ void Remesher::adjust_count() {
   }
 }
 
+int Remesher::flip_queue() {
+  // Vertices ordered by their weighted valence deviation, worst first; each takes the flip of
+  // one of its spokes or link edges that lowers R (3.22) most (the next best when E_dist /
+  // E_glatt refuses it); the four vertices of a flipped quad re-enter the queue.
+  auto score = [&](int v) {
+    if (!m_.vertex_alive[v] || m_.vfaces[v].empty() || vs_[v].kind == VertexKind::Branch) return 0;
+    const int d = std::abs(deviation(v, m_.vfaces[v][0]));
+    return vs_[v].kind == VertexKind::Skeleton ? 2 * d : d;
+  };
+  std::priority_queue<std::pair<int, int>> pq;  // (score, -v): ties by smallest index
+  for (int v = 0; v < static_cast<int>(m_.pos.size()); ++v)
+    if (const int sc = score(v); sc > 0) pq.push({sc, -v});
+  int flips = 0;
+  std::size_t budget = 20 * m_.pos.size();
+  std::vector<std::tuple<int, int, int>> cand;
+  while (!pq.empty() && budget-- > 0) {
+    const auto [sc, nv] = pq.top();
+    pq.pop();
+    const int v = -nv;
+    if (sc == 0 || score(v) != sc) continue;  // stale entry
+    cand.clear();
+    for (int f : m_.vfaces[v]) {
+      const auto& t = m_.tri[f];
+      for (int i = 0; i < 3; ++i) {
+        const int a = std::min(t[i], t[(i + 1) % 3]), b = std::max(t[i], t[(i + 1) % 3]);
+        if (m_.edge_face_count(a, b) != 2) continue;
+        const int d = flip_delta(a, b);
+        if (d < 0) cand.push_back({d, a, b});
+      }
+    }
+    std::sort(cand.begin(), cand.end());
+    cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
+    for (const auto& [d, a, b] : cand) {
+      const auto ef = m_.edge_faces(a, b);
+      if (ef.size() != 2) continue;
+      const int x = m_.opposite(ef[0], a, b), y = m_.opposite(ef[1], a, b);
+      if (!flip(a, b)) continue;
+      ++flips;
+      for (int u : {a, b, x, y})
+        if (const int su = score(u); su > 0) pq.push({su, -u});
+      break;
+    }
+  }
+  return flips;
+}
+
 void Remesher::regularize() {
   // §3.8: simple edges (flips lowering R) first, then long / short edges (split / collapse
   // followed by flips of the new link), one local angle-smoothing step after each operation.
-  flip_pass(false);
+  simple_flips();
   const auto es = m_.edges();
   int changed = 0;
   for (auto k : es) {
@@ -959,7 +1007,7 @@ void Remesher::regularize() {
             }
     }
   }
-  flip_pass(false);
+  simple_flips();
   // Drive edges: black-white pairs moved until they meet another irregular vertex.
   for (int round = 0; round < 10; ++round) {
     int ok = 0;
@@ -972,7 +1020,7 @@ void Remesher::regularize() {
       if (dv > 0 && dw < 0) std::swap(v, w), std::swap(dv, dw);
       if (dv < 0 && dw > 0 && (drive(v, w, 0) || drive(v, w, 1))) ++ok;
     }
-    flip_pass(false);
+    simple_flips();
     if (ok == 0) break;
   }
   (void)changed;
@@ -1136,14 +1184,14 @@ RemeshResult Remesher::run() {
     for (int k = 0; k < 4; ++k) {
       const std::size_t before = st_.skeleton_splits + st_.skeleton_collapses;
       skeleton_density_control();
-      flip_pass(false);
+      simple_flips();
       for (int j = 0; j < 2; ++j) skeleton_relax_pass();
       if (st_.skeleton_splits + st_.skeleton_collapses == before) break;
     }
     adjust_count();
     regularize();
     adjust_count();
-    flip_pass(false);
+    simple_flips();
   } else {
     for (int k = 0; k < 5; ++k) {
       relax_rounds(1, false);

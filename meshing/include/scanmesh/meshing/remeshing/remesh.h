@@ -80,7 +80,10 @@ struct RemeshOptions {
   int n_area = 3;                 //!< area-based moves per flip sweep (§3.4)
   int n_step = 5;                 //!< outer rounds of area-based remeshing (§3.4)
   int drive_limit = 10;           //!< §3.8
-  int smoothing_passes = 10;      //!< final angle-based (or centroidal) passes (§3.5)
+  //! Regularisation's simple-edge flips from a priority queue (worst valence deviation first,
+  //! best flip of its star) instead of sweeps over the edges in index order.
+  bool regularize_queue = false;
+  int smoothing_passes = 10;  //!< final angle-based (or centroidal) passes (§3.5)
   //! Called with (phase name, fraction done in [0, 1]); may be empty.
   std::function<void(const std::string&, double)> progress;
 };
