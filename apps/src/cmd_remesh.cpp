@@ -39,6 +39,7 @@ struct RemeshArgs {
   bool remove_spikes = false;
   double tip_angle = 120.0;
   bool queue = false;
+  bool allow_local_intersections = false;
 };
 
 int run_remesh(const RemeshArgs& a) {
@@ -94,6 +95,7 @@ int run_remesh(const RemeshArgs& a) {
   o.theta_dist_deg = a.theta_dist;
   o.skeleton.kink_angle_deg = a.kink_deg;
   o.regularize_queue = a.queue;
+  o.prevent_intersections = !a.allow_local_intersections;
   o.skeleton.kink_reach_mm = a.kink_reach;
   o.theta_glatt_deg = a.theta_glatt;
   if (a.features == "auto") {
@@ -197,6 +199,8 @@ void register_remesh_commands(CLI::App& app, CommandList& commands) {
               "fans at pinch vertices before remeshing");
   c->add_flag("--regularize-queue", args->queue,
               "Regularisation flips from a priority queue, worst valence deviation first");
+  c->add_flag("--no-prevention", args->allow_local_intersections,
+              "Do not refuse operations whose faces cut a neighbouring face (for measuring)");
   c->add_option("--tip-angle", args->tip_angle,
                 "With --remove-spikes: border tips sharper than this (deg) over one target edge "
                 "length are removed");

@@ -83,6 +83,9 @@ struct RemeshOptions {
   //! Regularisation's simple-edge flips from a priority queue (worst valence deviation first,
   //! best flip of its star) instead of sweeps over the edges in index order.
   bool regularize_queue = false;
+  //! Every operation is refused when a changed face would cut a face at one of its corners
+  //! (folds, local self-intersections); off only to measure what it costs and prevents.
+  bool prevent_intersections = true;
   int smoothing_passes = 10;  //!< final angle-based (or centroidal) passes (§3.5)
   //! Called with (phase name, fraction done in [0, 1]); may be empty.
   std::function<void(const std::string&, double)> progress;
