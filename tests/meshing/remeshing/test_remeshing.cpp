@@ -167,6 +167,7 @@ TEST(Remesh, TwoBoxesKeepSeamsSidesLabelsAndCount) {
   EXPECT_EQ(branches, 12u);
   const MeshCheckReport rep = check_mesh(m);
   EXPECT_EQ(rep.self_intersections, 0u);
+  EXPECT_EQ(r.stats.intersecting_faces_before_repair, 0u);  // prevented, not repaired
   EXPECT_EQ(rep.degenerate_faces, 0u);
   EXPECT_EQ(rep.duplicate_faces, 0u);
   const RemeshQuality q = evaluate_remesh(in, r, false);
@@ -206,6 +207,7 @@ TEST(Remesh, FeatureLineStaysAnEdgeChainOnTheInputLine) {
   }
   EXPECT_GT(on_line, 5);
   EXPECT_EQ(check_mesh(m).self_intersections, 0u);
+  EXPECT_EQ(r.stats.intersecting_faces_before_repair, 0u);  // prevented, not repaired
 }
 
 TEST(Remesh, SphereRespectsErrorBoundsAndIsRegular) {
@@ -235,6 +237,7 @@ TEST(Remesh, SphereRespectsErrorBoundsAndIsRegular) {
   EXPECT_LT(worst_dist * 180 / std::numbers::pi, o.theta_dist_deg + tol);
   const RemeshQuality q = evaluate_remesh(in, r, true);
   EXPECT_EQ(q.self_intersections, 0u);
+  EXPECT_EQ(r.stats.intersecting_faces_before_repair, 0u);  // prevented, not repaired
   EXPECT_GT(q.fraction_min_angle_ge_30, 0.98);
   EXPECT_LT(q.fraction_irregular, 0.15);
   // All vertices on the input (a polyhedron inscribed in the sphere): radius within the chord
