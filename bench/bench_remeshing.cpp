@@ -140,13 +140,28 @@ void compare(const sim::ScannerConfig& cfg, int target, bool uniform_only) {
   clean_grid(grid);
   const Mesh raw = grid_mesh(grid).mesh;
   remeshing::PrepareStats ps;
-  const Mesh in =
-      remeshing::prepare_input(raw, {.min_component_faces = 500, .max_hole_edges = 100}, &ps);
+  // Scan clean-up as `scanmesh remesh --min-component 500 --fill-holes 100 --needle-angle 5
+  // --remove-spikes`: border tips judged at the target edge length.
+  double raw_area = 0;
+  for (const auto& t : raw.triangles)
+    raw_area += 0.5 * (raw.positions[t[1]] - raw.positions[t[0]])
+                          .cross(raw.positions[t[2]] - raw.positions[t[0]])
+                          .norm();
+  const Mesh in = remeshing::prepare_input(
+      raw,
+      {.min_component_faces = 500,
+       .max_hole_edges = 100,
+       .needle_angle_deg = 5,
+       .remove_spikes = true,
+       .tip_reach_mm = std::sqrt(raw_area / (std::sqrt(3.0) / 2 * target))},
+      &ps);
   std::printf(
       "head grid mesh: %zu vertices, %zu triangles; prepared: %zu vertices, %zu triangles "
-      "(%zu crumbs removed, %zu holes closed)\n\n",
+      "(%zu crumbs removed, %zu holes closed, %zu spike / %zu pinch / %zu border-tip faces "
+      "removed)\n\n",
       raw.positions.size(), raw.triangles.size(), in.positions.size(), in.triangles.size(),
-      ps.components_removed, ps.holes_filled);
+      ps.components_removed, ps.holes_filled, ps.spike_faces_removed, ps.pinch_faces_removed,
+      ps.tip_faces_removed);
   std::printf(
       "| method | time [s] | vertices | min angle [deg] | tri >= 30 deg [%%] | mean Q | "
       "irregular valence [%%] | Hausdorff [mm] | mean dist [mm] | self-intersections |\n"

@@ -1,5 +1,7 @@
 // `scanmesh remesh`: seed 001 adaptive remeshing with feature skeleton (docs/remeshing.md).
 #include <CLI/CLI.hpp>
+#include <Eigen/Geometry>
+#include <cmath>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
@@ -10,6 +12,7 @@
 #include "scanmesh/core/atomic_file.h"
 #include "scanmesh/core/image.h"
 #include "scanmesh/core/mesh_io.h"
+#include "scanmesh/meshing/mesh_topology.h"
 #include "scanmesh/meshing/remeshing/remesh.h"
 #include "scanmesh/meshing/remeshing/remesh_quality.h"
 
@@ -23,6 +26,7 @@ struct RemeshArgs {
   int vertices = 20000;
   std::string features;  // file, "auto" or empty
   double sharp_deg = 60.0;
+  double kink_deg = 60.0, kink_reach = 0.0;
   double gamma = 3.0;
   int filter = 10;
   double clip = 4.0;
@@ -31,18 +35,57 @@ struct RemeshArgs {
   double theta_dist = 90.0, theta_glatt = 60.0;
   bool no_intersections = false;
   int min_component = 0, fill_holes = 0;
+  double needle_angle = 0;
+  bool remove_spikes = false;
+  double tip_angle = 120.0;
+  bool queue = false;
+  bool allow_local_intersections = false;
 };
 
 int run_remesh(const RemeshArgs& a) {
   using namespace remeshing;
   PrepareStats ps;
-  const Mesh input =
-      prepare_input(read_ply(a.mesh),
-                    {.min_component_faces = a.min_component, .max_hole_edges = a.fill_holes}, &ps);
+  const Mesh raw = read_ply(a.mesh);
+  double tip_reach = 0;
+  if (a.remove_spikes) {
+    // The mean edge of a uniform output with the requested count (F ~ 2 V faces).
+    double area = 0;
+    for (const auto& t : raw.triangles)
+      area += 0.5 * (raw.positions[t[1]] - raw.positions[t[0]])
+                        .cross(raw.positions[t[2]] - raw.positions[t[0]])
+                        .norm();
+    tip_reach = std::sqrt(area / (std::sqrt(3.0) / 2 * a.vertices));
+  }
+  const PrepareOptions po{.min_component_faces = a.min_component,
+                          .max_hole_edges = a.fill_holes,
+                          .needle_angle_deg = a.needle_angle,
+                          .remove_spikes = a.remove_spikes,
+                          .tip_reach_mm = tip_reach,
+                          .tip_angle_deg = a.tip_angle};
+  const Mesh input = prepare_input(raw, po, &ps);
+  if (a.needle_angle > 0)
+    std::cout << "prepare: " << ps.degenerate_removed << " degenerate faces removed, "
+              << ps.needles_welded << " needles welded, " << ps.caps_flipped << " caps flipped, "
+              << ps.caps_removed << " caps removed\n";
+  if (a.remove_spikes)
+    std::cout << "prepare: " << ps.spike_faces_removed << " spike faces and "
+              << ps.pinch_faces_removed << " faces at pinch vertices and " << ps.tip_faces_removed
+              << " at border tips sharper than " << a.tip_angle << " deg over " << tip_reach
+              << " mm removed\n";
   if (a.min_component > 0 || a.fill_holes > 0)
     std::cout << "prepare: removed " << ps.components_removed << " components (" << ps.faces_removed
               << " faces), closed " << ps.holes_filled << " holes (" << ps.faces_added
               << " faces)\n";
+  {
+    const TopologyStats ts = topology_stats(input);
+    std::cout << "input: " << input.triangles.size() << " triangles, " << ts.boundary_loops
+              << " boundary loops";
+    if (!ts.boundary_loop_lengths.empty())
+      std::cout << " (longest " << ts.boundary_loop_lengths.front() << " edges, shortest "
+                << ts.boundary_loop_lengths.back() << ")";
+    std::cout << ", " << ts.nonmanifold_edges << " non-manifold and " << ts.inconsistent_edges
+              << " inconsistently oriented edges\n";
+  }
   RemeshOptions o;
   o.target_vertices = a.vertices;
   o.scheme = parse_remesh_scheme(a.scheme);
@@ -50,6 +93,10 @@ int run_remesh(const RemeshArgs& a) {
   o.density.n_filter = a.filter;
   o.density.clip = a.clip;
   o.theta_dist_deg = a.theta_dist;
+  o.skeleton.kink_angle_deg = a.kink_deg;
+  o.regularize_queue = a.queue;
+  o.prevent_intersections = !a.allow_local_intersections;
+  o.skeleton.kink_reach_mm = a.kink_reach;
   o.theta_glatt_deg = a.theta_glatt;
   if (a.features == "auto") {
     o.skeleton.sharp_angle_deg = a.sharp_deg;
@@ -82,6 +129,7 @@ int run_remesh(const RemeshArgs& a) {
        << ", \"rejected_topology\": " << s.rejected_topology
        << ", \"skeleton_splits\": " << s.skeleton_splits
        << ", \"skeleton_collapses\": " << s.skeleton_collapses
+       << ", \"intersecting_faces_before_repair\": " << s.intersecting_faces_before_repair
        << ", \"seconds_setup\": " << s.seconds_setup << ", \"seconds_adapt\": " << s.seconds_adapt
        << ", \"seconds_count\": " << s.seconds_count
        << ", \"seconds_regularize\": " << s.seconds_regularize
@@ -98,9 +146,14 @@ int run_remesh(const RemeshArgs& a) {
             << "  min angle " << q.min_angle_deg
             << " deg, >= 30 deg: " << 100 * q.fraction_min_angle_ge_30 << " %, mean Q " << q.q_mean
             << ", irregular valence " << 100 * q.fraction_irregular << " %\n"
+            << "  triangles < 30 deg at: branch " << q.bad_at_branch << ", boundary "
+            << q.bad_at_boundary << ", other skeleton " << q.bad_at_skeleton << ", interior "
+            << q.bad_interior << "\n"
             << "  Hausdorff " << q.hausdorff << " mm (" << 100 * q.hausdorff / q.bbox_diagonal
             << " % of the diagonal), mean distance " << q.mean_distance << " mm";
-  if (q.self_intersections_checked) std::cout << ", self-intersections " << q.self_intersections;
+  if (q.self_intersections_checked)
+    std::cout << ", self-intersections " << q.self_intersections << " (faces cutting another "
+              << "before the repair pass: " << s.intersecting_faces_before_repair << ")";
   std::cout << "\nwrote " << a.out << "/{mesh.ply,report.json,quality.png,histograms.png}\n";
   return kSuccess;
 }
@@ -120,6 +173,10 @@ void register_remesh_commands(CLI::App& app, CommandList& commands) {
                 "Feature lines file (docs/formats.md) or 'auto' (sharp edges by dihedral angle)");
   c->add_option("--sharp", args->sharp_deg,
                 "Dihedral angle (deg) of sharp edges for --features auto");
+  c->add_option("--kink-angle", args->kink_deg,
+                "Turn (deg) of a skeleton chain that makes a fixed branch vertex (thesis: 60)");
+  c->add_option("--kink-reach", args->kink_reach,
+                "Arc length (mm) over which kinks are measured (0: the mean target edge length)");
   c->add_option("--gamma", args->gamma, "Density contrast gamma (0: uniform)");
   c->add_option("--filter", args->filter, "n_filter smoothing passes of the density");
   c->add_option("--clip", args->clip, "Max ratio of target edge length to its median");
@@ -134,6 +191,19 @@ void register_remesh_commands(CLI::App& app, CommandList& commands) {
                 "Drop connected components with fewer faces before remeshing (0: keep all)");
   c->add_option("--fill-holes", args->fill_holes,
                 "Close boundary loops with at most this many edges before remeshing (0: none)");
+  c->add_option("--needle-angle", args->needle_angle,
+                "Repair input triangles with a min angle below this (deg): degenerate faces "
+                "dropped, needles welded, caps flipped (0: off)");
+  c->add_flag("--remove-spikes", args->remove_spikes,
+              "Strip one-triangle-wide spikes and strands of a ragged border and the smaller "
+              "fans at pinch vertices before remeshing");
+  c->add_flag("--regularize-queue", args->queue,
+              "Regularisation flips from a priority queue, worst valence deviation first");
+  c->add_flag("--no-prevention", args->allow_local_intersections,
+              "Do not refuse operations whose faces cut a neighbouring face (for measuring)");
+  c->add_option("--tip-angle", args->tip_angle,
+                "With --remove-spikes: border tips sharper than this (deg) over one target edge "
+                "length are removed");
   c->add_option("--out", args->out, "Output directory")->required();
   commands.push_back({c, [args] { return run_remesh(*args); }});
 }

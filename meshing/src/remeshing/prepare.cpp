@@ -1,14 +1,329 @@
 // Scan clean-up before remeshing: tiny components removed, small holes closed by a fan.
+#include <Eigen/Geometry>
 #include <algorithm>
+#include <cmath>
+#include <deque>
 #include <map>
+#include <numbers>
 #include <unordered_map>
 
 #include "scanmesh/meshing/remeshing/remesh.h"
 
 namespace scanmesh::remeshing {
 
-Mesh prepare_input(const Mesh& in, const PrepareOptions& o, PrepareStats* stats) {
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+
+// Face soup with per-vertex face lists for local repairs; removed faces are marked dead.
+class Surface {
+ public:
+  explicit Surface(const Mesh& in)
+      : pos(in.positions),
+        tri(in.triangles),
+        alive(in.triangles.size(), 1),
+        vf(in.positions.size()) {
+    label = in.has_face_labels() ? in.face_labels : std::vector<int>(tri.size(), 0);
+    for (std::size_t f = 0; f < tri.size(); ++f)
+      for (int c : tri[f]) vf[c].push_back(static_cast<int>(f));
+  }
+  static bool has(const std::array<int, 3>& t, int v) {
+    return t[0] == v || t[1] == v || t[2] == v;
+  }
+  int edge_count(int a, int b) const {
+    int n = 0;
+    for (int f : vf[a]) n += alive[f] && has(tri[f], b);
+    return n;
+  }
+  std::vector<int> edge_faces(int a, int b) const {
+    std::vector<int> out;
+    for (int f : vf[a])
+      if (alive[f] && has(tri[f], b)) out.push_back(f);
+    return out;
+  }
+  bool on_boundary(int v) const {
+    for (int f : vf[v])
+      if (alive[f])
+        for (int c : tri[f])
+          if (c != v && edge_count(v, c) == 1) return true;
+    return false;
+  }
+  std::vector<int> neighbours(int v) const {
+    std::vector<int> out;
+    for (int f : vf[v])
+      if (alive[f])
+        for (int c : tri[f])
+          if (c != v) out.push_back(c);
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
+  }
+  void kill(int f) { alive[f] = 0; }
+  double min_angle(int f, int* short_i = nullptr, double* max_angle = nullptr) const {
+    const auto& t = tri[f];
+    double mn = 10, mx = 0;
+    for (int i = 0; i < 3; ++i) {
+      const Vec3 e1 = pos[t[(i + 1) % 3]] - pos[t[i]], e2 = pos[t[(i + 2) % 3]] - pos[t[i]];
+      const double a = std::atan2(e1.cross(e2).norm(), e1.dot(e2));
+      if (a < mn) {
+        mn = a;
+        if (short_i) *short_i = i;  // the short edge is opposite corner i
+      }
+      mx = std::max(mx, a);
+    }
+    if (max_angle) *max_angle = mx;
+    return mn;
+  }
+  Mesh to_mesh() const {
+    Mesh out;
+    std::vector<int> map(pos.size(), -1);
+    for (std::size_t f = 0; f < tri.size(); ++f) {
+      if (!alive[f]) continue;
+      std::array<int, 3> t{};
+      for (int i = 0; i < 3; ++i) {
+        int& m = map[tri[f][i]];
+        if (m < 0) {
+          m = static_cast<int>(out.positions.size());
+          out.positions.push_back(pos[tri[f][i]]);
+        }
+        t[i] = m;
+      }
+      out.triangles.push_back(t);
+      out.face_labels.push_back(label[f]);
+    }
+    return out;
+  }
+
+  std::vector<Vec3> pos;
+  std::vector<std::array<int, 3>> tri;
+  std::vector<char> alive;
+  std::vector<std::vector<int>> vf;
+  std::vector<int> label;
+};
+
+void repair_needles(Surface& s, double max_angle_rad, PrepareStats& st) {
+  const int nf = static_cast<int>(s.tri.size());
+  for (int f = 0; f < nf; ++f) {
+    if (!s.alive[f]) continue;
+    const auto t = s.tri[f];
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] ||
+        !((s.pos[t[1]] - s.pos[t[0]]).cross(s.pos[t[2]] - s.pos[t[0]]).norm() > 0)) {
+      s.kill(f);
+      ++st.degenerate_removed;
+      continue;
+    }
+    int i = 0;
+    double amax = 0;
+    if (s.min_angle(f, &i, &amax) >= max_angle_rad) continue;
+    if (amax > 2 * std::numbers::pi / 3) {
+      // Cap: the longest edge is opposite the largest angle, corner c.
+      int ci = 0;
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 e1 = s.pos[t[(k + 1) % 3]] - s.pos[t[k]],
+                   e2 = s.pos[t[(k + 2) % 3]] - s.pos[t[k]];
+        if (std::atan2(e1.cross(e2).norm(), e1.dot(e2)) >= amax - 1e-15) ci = k;
+      }
+      const int c = t[ci], a = t[(ci + 1) % 3], b = t[(ci + 2) % 3];  // f = (c, a, b)
+      const auto ef = s.edge_faces(a, b);
+      if (ef.size() == 1) {
+        s.kill(f);
+        ++st.caps_removed;
+        continue;
+      }
+      if (ef.size() != 2) continue;
+      const int g = ef[0] == f ? ef[1] : ef[0];
+      const auto u = s.tri[g];
+      const int d = u[0] != a && u[0] != b ? u[0] : (u[1] != a && u[1] != b ? u[1] : u[2]);
+      if (d == c || s.edge_count(c, d) > 0) continue;
+      // f = (c, a, b) has a -> b; g has b -> a: g = (b, a, d) up to rotation. New (c, a, d),
+      // (d, b, c).
+      const int gi = u[0] == b ? 0 : (u[1] == b ? 1 : 2);
+      if (u[(gi + 1) % 3] != a) continue;  // inconsistent orientation: leave it
+      const double before = std::min(s.min_angle(f), s.min_angle(g));
+      s.tri[f] = {c, a, d};
+      s.tri[g] = {d, b, c};
+      if (std::min(s.min_angle(f), s.min_angle(g)) <= before) {
+        s.tri[f] = t;
+        s.tri[g] = u;
+        continue;
+      }
+      std::erase(s.vf[a], g);
+      std::erase(s.vf[b], f);
+      s.vf[c].push_back(g);
+      s.vf[d].push_back(f);
+      ++st.caps_flipped;
+      continue;
+    }
+    // Needle: weld the short edge (a, b) opposite corner i, keeping a boundary end in place.
+    int a = t[(i + 1) % 3], b = t[(i + 2) % 3];
+    const bool ba = s.on_boundary(a), bb = s.on_boundary(b);
+    if (ba && bb) continue;
+    if (bb) std::swap(a, b);  // a survives
+    // Link condition: the common neighbours of a and b are the opposite corners of edge (a, b).
+    const auto ef = s.edge_faces(a, b);
+    std::vector<int> opp;
+    for (int e : ef)
+      for (int c : s.tri[e])
+        if (c != a && c != b) opp.push_back(c);
+    const auto na = s.neighbours(a), nb = s.neighbours(b);
+    bool ok = ef.size() <= 2;
+    for (int x : nb)
+      if (x != a && std::binary_search(na.begin(), na.end(), x) &&
+          std::find(opp.begin(), opp.end(), x) == opp.end())
+        ok = false;
+    if (!ok) continue;
+    if (!ba && !bb) s.pos[a] = 0.5 * (s.pos[a] + s.pos[b]);
+    for (int e : ef) s.kill(e);
+    for (int e : s.vf[b]) {
+      if (!s.alive[e]) continue;
+      for (int& c : s.tri[e])
+        if (c == b) c = a;
+      s.vf[a].push_back(e);
+    }
+    s.vf[b].clear();
+    ++st.needles_welded;
+  }
+}
+
+// Sharp convex tips of the border at scale `reach`: the border is followed `reach` mm back and
+// forward from each boundary vertex; where the surface's angle between the two chords is below
+// `max_angle` the vertex's faces are removed. Returns the number of faces removed.
+std::size_t remove_tips(Surface& s, double reach, double max_angle) {
+  const int nv = static_cast<int>(s.pos.size());
+  std::vector<int> next(nv, -1), prev(nv, -1);
+  for (std::size_t f = 0; f < s.tri.size(); ++f) {
+    if (!s.alive[f]) continue;
+    const auto& t = s.tri[f];
+    for (int i = 0; i < 3; ++i) {
+      const int a = t[i], b = t[(i + 1) % 3];
+      if (s.edge_count(a, b) == 1) {
+        next[a] = b;
+        prev[b] = a;
+      }
+    }
+  }
+  auto walk = [&](int v, const std::vector<int>& step) {
+    int cur = v;
+    double arc = 0;
+    for (int k = 0; k < 1000 && arc < reach; ++k) {
+      const int n = step[cur];
+      if (n < 0 || n == v) break;
+      arc += (s.pos[n] - s.pos[cur]).norm();
+      cur = n;
+    }
+    return cur;
+  };
+  std::vector<int> tips;
+  for (int v = 0; v < nv; ++v) {
+    if (next[v] < 0 || prev[v] < 0) continue;
+    const int f = walk(v, next), b = walk(v, prev);
+    if (f == v || b == v || f == b) continue;
+    Vec3 n = Vec3::Zero();
+    for (int g : s.vf[v])
+      if (s.alive[g]) {
+        const auto& t = s.tri[g];
+        n += (s.pos[t[1]] - s.pos[t[0]]).cross(s.pos[t[2]] - s.pos[t[0]]);
+      }
+    const Vec3 db = s.pos[b] - s.pos[v], df = s.pos[f] - s.pos[v];
+    const double alpha = std::atan2(db.cross(df).norm(), db.dot(df));
+    // Faces lie to the left of the directed border (b -> v -> f): a left turn is convex.
+    const bool convex = (s.pos[v] - s.pos[b]).cross(df).dot(n) > 0;
+    if (convex && alpha < max_angle) tips.push_back(v);
+  }
+  std::size_t removed = 0;
+  for (int v : tips)
+    for (int g : s.vf[v])
+      if (s.alive[g]) {
+        s.kill(g);
+        ++removed;
+      }
+  return removed;
+}
+
+void remove_spikes(Surface& s, double tip_reach, double tip_angle, PrepareStats& st) {
+  const int nf = static_cast<int>(s.tri.size());
+  for (int round = 0; round < 100; ++round) {
+    // Pinch vertices: keep the largest fan (faces connected across edges at the vertex).
+    std::size_t pinched = 0;
+    for (int v = 0; v < static_cast<int>(s.pos.size()); ++v) {
+      std::vector<int> fs;
+      for (int f : s.vf[v])
+        if (s.alive[f]) fs.push_back(f);
+      if (fs.size() < 2) continue;
+      std::sort(fs.begin(), fs.end());
+      std::vector<int> comp(fs.size(), -1);
+      int nc = 0;
+      for (std::size_t k = 0; k < fs.size(); ++k) {
+        if (comp[k] >= 0) continue;
+        comp[k] = nc;
+        std::vector<std::size_t> stack = {k};
+        while (!stack.empty()) {
+          const std::size_t x = stack.back();
+          stack.pop_back();
+          for (std::size_t y = 0; y < fs.size(); ++y) {
+            if (comp[y] >= 0) continue;
+            int shared = 0;
+            for (int c : s.tri[fs[x]]) shared += c != v && Surface::has(s.tri[fs[y]], c);
+            if (shared > 0) {
+              comp[y] = nc;
+              stack.push_back(y);
+            }
+          }
+        }
+        ++nc;
+      }
+      if (nc < 2) continue;
+      std::vector<int> size(nc, 0);
+      for (int c : comp) ++size[c];
+      const int keep = static_cast<int>(std::max_element(size.begin(), size.end()) - size.begin());
+      for (std::size_t k = 0; k < fs.size(); ++k)
+        if (comp[k] != keep) {
+          s.kill(fs[k]);
+          ++st.pinch_faces_removed;
+          ++pinched;
+        }
+    }
+    // Ears: faces with two or three boundary edges, until none is left.
+    std::deque<int> queue;
+    for (int f = 0; f < nf; ++f)
+      if (s.alive[f]) queue.push_back(f);
+    std::size_t eaten = 0;
+    while (!queue.empty()) {
+      const int f = queue.front();
+      queue.pop_front();
+      if (!s.alive[f]) continue;
+      const auto& t = s.tri[f];
+      int boundary = 0;
+      for (int i = 0; i < 3; ++i) boundary += s.edge_count(t[i], t[(i + 1) % 3]) == 1;
+      if (boundary < 2) continue;
+      s.kill(f);
+      ++eaten;
+      for (int c : t)
+        for (int g : s.vf[c])
+          if (s.alive[g]) queue.push_back(g);
+    }
+    st.spike_faces_removed += eaten;
+    const std::size_t tipped = tip_reach > 0 ? remove_tips(s, tip_reach, tip_angle) : 0;
+    st.tip_faces_removed += tipped;
+    if (pinched == 0 && tipped == 0) break;
+  }
+}
+
+}  // namespace
+
+Mesh prepare_input(const Mesh& original, const PrepareOptions& o, PrepareStats* stats) {
   PrepareStats st;
+  Mesh repaired;
+  if (o.needle_angle_deg > 0 || o.remove_spikes) {
+    Surface s(original);
+    if (o.needle_angle_deg > 0)
+      for (int pass = 0; pass < 3; ++pass)
+        repair_needles(s, o.needle_angle_deg * std::numbers::pi / 180, st);
+    if (o.remove_spikes)
+      remove_spikes(s, o.tip_reach_mm, o.tip_angle_deg * std::numbers::pi / 180, st);
+    repaired = s.to_mesh();
+  }
+  const Mesh& in = (o.needle_angle_deg > 0 || o.remove_spikes) ? repaired : original;
   const int nv = static_cast<int>(in.positions.size());
   const int nf = static_cast<int>(in.triangles.size());
   std::vector<char> keep(nf, 1);

@@ -126,8 +126,11 @@ class Remesher {
   bool faces_ok(const std::vector<int>& fs) const {
     for (int f : fs)
       if (!face_ok(f)) return false;
-    return true;
+    return !embed_check_ || locally_embedded(fs);
   }
+  // No changed face intersects a live face at one of its corners: prevents
+  // folds and local self-intersections instead of repairing them afterwards.
+  bool locally_embedded(const std::vector<int>& fs) const;
   std::vector<int> fan(int v, int f) const;  // faces of v's side containing f
   int side_valence(int v, int f) const { return static_cast<int>(fan(v, f).size()) - 1; }
   int deviation(int v, int f) const;  // valence minus optimum (0 for branch)
@@ -141,6 +144,7 @@ class Remesher {
   int flip_delta(int v, int w) const;  // change of R (3.22) by flipping, 1000 if impossible
   bool drive(int b, int w, int side);
   std::array<int, 2> last_flip_{-1, -1};
+  bool try_state(int v, const VState& ns);  // move v to ns if its star stays valid
   bool move_to(int v, const Vec3& x);       // free vertex, 3D target (projected)
   bool move_skeleton(int v, double s_new);  // skeleton vertex, 1D
   bool flip_improves_valence(int v, int w) const;
@@ -150,8 +154,17 @@ class Remesher {
   void split_long();
   void collapse_short();
   int flip_pass(bool delaunay);
+  int flip_queue();  // simple-edge flips, worst valence deviation first
+  int simple_flips() { return o_.regularize_queue ? flip_queue() : flip_pass(false); }
   void relax_pass(bool angle_based);
   void skeleton_relax_pass();
+  // `passes` x (free vertices: centroidal or angle-based move, skeleton vertices: 1D move).
+  void relax_rounds(int passes, bool angle_based) {
+    for (int k = 0; k < passes; ++k) {
+      relax_pass(angle_based);
+      skeleton_relax_pass();
+    }
+  }
   void skeleton_density_control();
   void adjust_count();
   void regularize();
@@ -174,6 +187,9 @@ class Remesher {
   std::vector<int> seg_edges_;                    // M edges per segment
   double scale_ = 1;
   double cos_dist_ = 0, cos_glatt_ = 0;
+  // locally_embedded is checked from the vertex-count phase on: in the adapt phase the mesh is
+  // still the dense input, where it doubled the run time and refused nothing (measured).
+  bool embed_check_ = false;
   RemeshStats st_;
 };
 
@@ -343,6 +359,35 @@ bool Remesher::face_ok(int f) const {
   }
   for (int i = 0; i < 3; ++i)
     if (cn[i].dot(cn[(i + 1) % 3]) <= cos_dist_) return false;  // E_dist (3.4)
+  return true;
+}
+
+bool Remesher::locally_embedded(const std::vector<int>& fs) const {
+  std::vector<int> near;
+  for (int f : fs)
+    for (int c : m_.tri[f])
+      for (int g : m_.vfaces[c]) near.push_back(g);
+  std::sort(near.begin(), near.end());
+  near.erase(std::unique(near.begin(), near.end()), near.end());
+  for (int f : fs) {
+    const auto& t = m_.tri[f];
+    Vec3 lo = m_.pos[t[0]], hi = lo;
+    for (int c : t) {
+      lo = lo.cwiseMin(m_.pos[c]);
+      hi = hi.cwiseMax(m_.pos[c]);
+    }
+    for (int h : near) {
+      if (h == f || !m_.face_alive[h]) continue;
+      const auto& u = m_.tri[h];
+      bool apart = false;
+      for (int k = 0; k < 3 && !apart; ++k) {
+        const double a = std::min({m_.pos[u[0]][k], m_.pos[u[1]][k], m_.pos[u[2]][k]});
+        const double b = std::max({m_.pos[u[0]][k], m_.pos[u[1]][k], m_.pos[u[2]][k]});
+        apart = a > hi[k] || b < lo[k];
+      }
+      if (!apart && triangles_intersect(m_.pos, t, u)) return false;
+    }
+  }
   return true;
 }
 
@@ -557,9 +602,9 @@ bool Remesher::flip(int v, int w, bool check) {
   return true;
 }
 
-bool Remesher::move_to(int v, const Vec3& x) {
-  VState ns = vs_[v];
-  project(x, ns.iface, ns.bary);
+bool Remesher::try_state(int v, const VState& ns) {
+  // Shared by every vertex move: apply, check the star (E_dist, E_glatt, no fold or local
+  // intersection), undo on failure.
   const VState old = vs_[v];
   const Vec3 old_pos = m_.pos[v];
   set_state(v, ns);
@@ -573,20 +618,16 @@ bool Remesher::move_to(int v, const Vec3& x) {
   return true;
 }
 
+bool Remesher::move_to(int v, const Vec3& x) {
+  VState ns = vs_[v];
+  project(x, ns.iface, ns.bary);
+  return try_state(v, ns);
+}
+
 bool Remesher::move_skeleton(int v, double s_new) {
-  const VState old = vs_[v];
-  const Vec3 old_pos = m_.pos[v];
-  VState ns = old;
+  VState ns = vs_[v];
   ns.s = s_new;
-  set_state(v, ns);
-  if (!faces_ok(m_.vfaces[v])) {
-    vs_[v] = old;
-    m_.pos[v] = old_pos;
-    ++st_.rejected_error;
-    return false;
-  }
-  ++st_.moves;
-  return true;
+  return try_state(v, ns);
 }
 
 bool Remesher::flip_improves_valence(int v, int w) const { return flip_delta(v, w) < 0; }
@@ -891,10 +932,56 @@ void Remesher::adjust_count() {
   }
 }
 
+int Remesher::flip_queue() {
+  // Vertices ordered by their weighted valence deviation, worst first; each takes the flip of
+  // one of its spokes or link edges that lowers R (3.22) most (the next best when E_dist /
+  // E_glatt refuses it); the four vertices of a flipped quad re-enter the queue.
+  auto score = [&](int v) {
+    if (!m_.vertex_alive[v] || m_.vfaces[v].empty() || vs_[v].kind == VertexKind::Branch) return 0;
+    const int d = std::abs(deviation(v, m_.vfaces[v][0]));
+    return vs_[v].kind == VertexKind::Skeleton ? 2 * d : d;
+  };
+  std::priority_queue<std::pair<int, int>> pq;  // (score, -v): ties by smallest index
+  for (int v = 0; v < static_cast<int>(m_.pos.size()); ++v)
+    if (const int sc = score(v); sc > 0) pq.push({sc, -v});
+  int flips = 0;
+  std::size_t budget = 20 * m_.pos.size();
+  std::vector<std::tuple<int, int, int>> cand;
+  while (!pq.empty() && budget-- > 0) {
+    const auto [sc, nv] = pq.top();
+    pq.pop();
+    const int v = -nv;
+    if (sc == 0 || score(v) != sc) continue;  // stale entry
+    cand.clear();
+    for (int f : m_.vfaces[v]) {
+      const auto& t = m_.tri[f];
+      for (int i = 0; i < 3; ++i) {
+        const int a = std::min(t[i], t[(i + 1) % 3]), b = std::max(t[i], t[(i + 1) % 3]);
+        if (m_.edge_face_count(a, b) != 2) continue;
+        const int d = flip_delta(a, b);
+        if (d < 0) cand.push_back({d, a, b});
+      }
+    }
+    std::sort(cand.begin(), cand.end());
+    cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
+    for (const auto& [d, a, b] : cand) {
+      const auto ef = m_.edge_faces(a, b);
+      if (ef.size() != 2) continue;
+      const int x = m_.opposite(ef[0], a, b), y = m_.opposite(ef[1], a, b);
+      if (!flip(a, b)) continue;
+      ++flips;
+      for (int u : {a, b, x, y})
+        if (const int su = score(u); su > 0) pq.push({su, -u});
+      break;
+    }
+  }
+  return flips;
+}
+
 void Remesher::regularize() {
   // §3.8: simple edges (flips lowering R) first, then long / short edges (split / collapse
   // followed by flips of the new link), one local angle-smoothing step after each operation.
-  flip_pass(false);
+  simple_flips();
   const auto es = m_.edges();
   int changed = 0;
   for (auto k : es) {
@@ -923,7 +1010,7 @@ void Remesher::regularize() {
             }
     }
   }
-  flip_pass(false);
+  simple_flips();
   // Drive edges: black-white pairs moved until they meet another irregular vertex.
   for (int round = 0; round < 10; ++round) {
     int ok = 0;
@@ -936,7 +1023,7 @@ void Remesher::regularize() {
       if (dv > 0 && dw < 0) std::swap(v, w), std::swap(dv, dw);
       if (dv < 0 && dw > 0 && (drive(v, w, 0) || drive(v, w, 1))) ++ok;
     }
-    flip_pass(false);
+    simple_flips();
     if (ok == 0) break;
   }
   (void)changed;
@@ -995,10 +1082,13 @@ std::vector<int> Remesher::intersecting_faces() const {
 }
 
 void Remesher::repair_intersections() {
-  // Not in the thesis (it leaves global self-intersections open): faces that cut another face
-  // get Delaunay flips and their free corners pulled to the centroid of their star.
+  // Not in the thesis (it leaves global self-intersections open). Local ones are prevented by
+  // every operation (locally_embedded); what is left here are distant sheets touching. Faces
+  // that cut another face get Delaunay flips and their free corners pulled to the centroid of
+  // their star.
   for (int round = 0; round < 4; ++round) {
     const std::vector<int> bad = intersecting_faces();
+    if (round == 0) st_.intersecting_faces_before_repair = bad.size();
     if (bad.empty()) return;
     for (int f : bad) {
       if (!m_.face_alive[f]) continue;
@@ -1071,24 +1161,19 @@ RemeshResult Remesher::run() {
     collapse_short();
     skeleton_density_control();
     flip_pass(false);
-    for (int k = 0; k < 2; ++k) {
-      relax_pass(false);
-      skeleton_relax_pass();
-    }
+    relax_rounds(2, false);
     // Steer the scale toward the requested count.
     const double ratio = static_cast<double>(m_.vertex_count()) / o_.target_vertices;
     scale_ *= std::pow(ratio, 0.5);
   }
   st_.seconds_adapt = seconds_since(t1);
+  embed_check_ = o_.prevent_intersections;
   t1 = std::chrono::steady_clock::now();
   report("count", 0);
   adjust_count();
   // Area-based remeshing (§3.4): n_step x (n_area moves + Delaunay flips), skeleton control.
   for (int step = 0; step < o_.n_step; ++step) {
-    for (int k = 0; k < o_.n_area; ++k) {
-      relax_pass(false);
-      skeleton_relax_pass();
-    }
+    relax_rounds(o_.n_area, false);
     flip_pass(true);
     skeleton_density_control();
     adjust_count();
@@ -1103,18 +1188,17 @@ RemeshResult Remesher::run() {
     for (int k = 0; k < 4; ++k) {
       const std::size_t before = st_.skeleton_splits + st_.skeleton_collapses;
       skeleton_density_control();
-      flip_pass(false);
+      simple_flips();
       for (int j = 0; j < 2; ++j) skeleton_relax_pass();
       if (st_.skeleton_splits + st_.skeleton_collapses == before) break;
     }
     adjust_count();
     regularize();
     adjust_count();
-    flip_pass(false);
+    simple_flips();
   } else {
     for (int k = 0; k < 5; ++k) {
-      relax_pass(false);
-      skeleton_relax_pass();
+      relax_rounds(1, false);
       flip_pass(true);
       skeleton_density_control();
     }
@@ -1124,8 +1208,7 @@ RemeshResult Remesher::run() {
   t1 = std::chrono::steady_clock::now();
   for (int k = 0; k < o_.smoothing_passes; ++k) {
     report("smooth", static_cast<double>(k) / std::max(1, o_.smoothing_passes));
-    relax_pass(o_.scheme == RemeshScheme::Regularize);
-    skeleton_relax_pass();
+    relax_rounds(1, o_.scheme == RemeshScheme::Regularize);
   }
   repair_intersections();
   st_.seconds_smooth = seconds_since(t1);

@@ -185,7 +185,19 @@ RemeshQuality evaluate_remesh(const Mesh& input, const RemeshResult& r, bool che
     const double ang = min_angle(a, b, c);
     amin = std::min(amin, ang);
     asum += ang;
-    ge30 += ang >= std::numbers::pi / 6 - 1e-12;
+    if (ang >= std::numbers::pi / 6 - 1e-12) {
+      ++ge30;
+    } else if (r.kind.size() == m.positions.size()) {
+      int worst = 0;  // 3 branch, 2 boundary, 1 other skeleton, 0 free
+      for (int v : t) {
+        if (r.kind[v] == VertexKind::Branch) worst = std::max(worst, 3);
+        if (r.kind[v] == VertexKind::Skeleton) worst = std::max(worst, r.sides[v] == 1 ? 2 : 1);
+      }
+      ++(worst == 3   ? q.bad_at_branch
+         : worst == 2 ? q.bad_at_boundary
+         : worst == 1 ? q.bad_at_skeleton
+                      : q.bad_interior);
+    }
     q.angle_histogram[std::clamp(static_cast<int>(ang * 180 / std::numbers::pi / 5), 0, 11)]++;
     const double ar = aspect_ratio(a, b, c);
     qsum += std::min(ar, 1e6);
@@ -238,6 +250,9 @@ std::string RemeshQuality::to_json() const {
   o << "{\n  \"vertices\": " << vertices << ",\n  \"faces\": " << faces
     << ",\n  \"min_angle_deg\": " << min_angle_deg
     << ",\n  \"mean_min_angle_deg\": " << mean_min_angle_deg
+    << ",\n  \"below_30_at\": {\"branch\": " << bad_at_branch
+    << ", \"boundary\": " << bad_at_boundary << ", \"skeleton\": " << bad_at_skeleton
+    << ", \"interior\": " << bad_interior << "}"
     << ",\n  \"fraction_min_angle_ge_30\": " << fraction_min_angle_ge_30
     << ",\n  \"q_mean\": " << q_mean << ",\n  \"q_max\": " << (std::isfinite(q_max) ? q_max : 1e308)
     << ",\n  \"q_histogram\": [";

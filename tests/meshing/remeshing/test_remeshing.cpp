@@ -167,6 +167,7 @@ TEST(Remesh, TwoBoxesKeepSeamsSidesLabelsAndCount) {
   EXPECT_EQ(branches, 12u);
   const MeshCheckReport rep = check_mesh(m);
   EXPECT_EQ(rep.self_intersections, 0u);
+  EXPECT_EQ(r.stats.intersecting_faces_before_repair, 0u);  // prevented, not repaired
   EXPECT_EQ(rep.degenerate_faces, 0u);
   EXPECT_EQ(rep.duplicate_faces, 0u);
   const RemeshQuality q = evaluate_remesh(in, r, false);
@@ -206,6 +207,7 @@ TEST(Remesh, FeatureLineStaysAnEdgeChainOnTheInputLine) {
   }
   EXPECT_GT(on_line, 5);
   EXPECT_EQ(check_mesh(m).self_intersections, 0u);
+  EXPECT_EQ(r.stats.intersecting_faces_before_repair, 0u);  // prevented, not repaired
 }
 
 TEST(Remesh, SphereRespectsErrorBoundsAndIsRegular) {
@@ -235,6 +237,7 @@ TEST(Remesh, SphereRespectsErrorBoundsAndIsRegular) {
   EXPECT_LT(worst_dist * 180 / std::numbers::pi, o.theta_dist_deg + tol);
   const RemeshQuality q = evaluate_remesh(in, r, true);
   EXPECT_EQ(q.self_intersections, 0u);
+  EXPECT_EQ(r.stats.intersecting_faces_before_repair, 0u);  // prevented, not repaired
   EXPECT_GT(q.fraction_min_angle_ge_30, 0.98);
   EXPECT_LT(q.fraction_irregular, 0.15);
   // All vertices on the input (a polyhedron inscribed in the sphere): radius within the chord
@@ -273,6 +276,90 @@ TEST(Prepare, DropsCrumbsAndClosesSmallHoles) {
   const MeshCheckReport rep = check_mesh(out, {.self_intersections = false});
   EXPECT_EQ(rep.topology.boundary_loops, 0u);
   EXPECT_TRUE(rep.edge_manifold());
+}
+
+int vertex_at(const Mesh& m, const Vec3& p) {
+  for (std::size_t i = 0; i < m.positions.size(); ++i)
+    if ((m.positions[i] - p).norm() < 1e-9) return static_cast<int>(i);
+  return -1;
+}
+
+TEST(Prepare, StripsStrandsAndPinches) {
+  // 10 x 10 cell sheet (200 faces) + a strand one triangle wide (8 faces) on the border x = 20
+  // + one triangle touching the corner (0, 0) at a single vertex.
+  Mesh in = test::wavy_sheet(10, 0, nullptr);
+  const int s0 = vertex_at(in, {20, 8, 2 * std::sin(5.0)}),
+            s1 = vertex_at(in, {20, 10, 2 * std::sin(5.0)});
+  const int corner = vertex_at(in, {0, 0, 0});
+  ASSERT_GE(s0, 0);
+  ASSERT_GE(s1, 0);
+  ASSERT_GE(corner, 0);
+  std::vector<int> q = {s0, s1};
+  for (int k = 2; k < 10; ++k) {
+    q.push_back(static_cast<int>(in.positions.size()));
+    in.positions.push_back({20.0 + (k - 1), 8.0 + 2 * (k % 2), 2 * std::sin(5.0)});
+  }
+  for (int k = 0; k + 2 < 10; ++k) {
+    in.triangles.push_back(k % 2 ? std::array<int, 3>{q[k + 1], q[k], q[k + 2]}
+                                 : std::array<int, 3>{q[k], q[k + 1], q[k + 2]});
+    in.face_labels.push_back(0);
+  }
+  const int a = static_cast<int>(in.positions.size());
+  in.positions.push_back({-1, -0.5, 0});
+  in.positions.push_back({-2, -2, 0});
+  in.triangles.push_back({corner, a + 1, a});
+  in.face_labels.push_back(0);
+  ASSERT_GT(check_mesh(in, {.self_intersections = false}).nonmanifold_vertices, 0u);
+
+  PrepareStats st;
+  const Mesh out = prepare_input(in, {.remove_spikes = true}, &st);
+  EXPECT_EQ(st.pinch_faces_removed, 1u);
+  // The strand, then the two sheet corners cut by one diagonal (faces with two border edges).
+  EXPECT_EQ(st.spike_faces_removed, 8u + 2u);
+  EXPECT_EQ(out.triangles.size(), 198u);
+  for (const auto& p : out.positions) EXPECT_LE(p.x(), 20.0 + 1e-12);
+  for (const auto& p : out.positions) EXPECT_GE(p.x(), 0.0);
+  const MeshCheckReport rep = check_mesh(out, {.self_intersections = false});
+  EXPECT_EQ(rep.nonmanifold_vertices, 0u);
+  EXPECT_EQ(rep.topology.boundary_loops, 1u);
+}
+
+TEST(Prepare, WeldsNeedlesAndDropsDegenerateFaces) {
+  Mesh in = test::wavy_sheet(6, 0, nullptr);
+  const Vec3 p = in.positions[vertex_at(in, {20.0 * 3 / 6, 20.0 * 3 / 6, 2 * std::sin(2.5)})];
+  const int v = vertex_at(in, p), w = vertex_at(in, {20.0 * 4 / 6, 10, 2 * std::sin(20.0 / 6)});
+  ASSERT_GE(v, 0);
+  ASSERT_GE(w, 0);
+  // Interior vertex v pulled to within 1 % of its neighbour w: the faces on edge (v, w) become
+  // needles.
+  in.positions[v] = in.positions[w] + 0.01 * (p - in.positions[w]);
+  // A zero-area face (three collinear points) far away.
+  const int b = static_cast<int>(in.positions.size());
+  for (int k = 0; k < 3; ++k) in.positions.push_back({100.0 + k, 0, 0});
+  in.triangles.push_back({b, b + 1, b + 2});
+  in.face_labels.push_back(0);
+  auto worst = [](const Mesh& m) {
+    double mn = 180;
+    for (const auto& t : m.triangles) {
+      for (int i = 0; i < 3; ++i) {
+        const Vec3 e1 = m.positions[t[(i + 1) % 3]] - m.positions[t[i]];
+        const Vec3 e2 = m.positions[t[(i + 2) % 3]] - m.positions[t[i]];
+        mn = std::min(mn, std::atan2(e1.cross(e2).norm(), e1.dot(e2)) * 180 / std::numbers::pi);
+      }
+    }
+    return mn;
+  };
+  ASSERT_LT(worst(in), 1.0);
+  PrepareStats st;
+  const Mesh out = prepare_input(in, {.needle_angle_deg = 5}, &st);
+  EXPECT_EQ(st.degenerate_removed, 1u);
+  EXPECT_GE(st.needles_welded, 1u);
+  EXPECT_EQ(out.triangles.size(), in.triangles.size() - 1 - 2 * st.needles_welded);
+  EXPECT_GT(worst(out), 5.0);
+  const MeshCheckReport rep = check_mesh(out, {.self_intersections = true});
+  EXPECT_EQ(rep.nonmanifold_vertices, 0u);
+  EXPECT_EQ(rep.self_intersections, 0u);
+  EXPECT_EQ(rep.topology.boundary_loops, 1u);
 }
 
 }  // namespace

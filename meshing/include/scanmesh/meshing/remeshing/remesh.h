@@ -45,9 +45,25 @@ std::vector<double> estimate_kappa_max(const NmMesh& m0);
 struct PrepareOptions {
   int min_component_faces = 0;  //!< drop connected components with fewer faces
   int max_hole_edges = 0;       //!< close simple boundary loops with at most this many edges
+  //! Triangles with a min angle below this (deg) are repaired first: zero-area faces dropped,
+  //! needles (one short edge) welded shut, caps (one angle > 120 deg) flipped across their long
+  //! edge or dropped when it is a boundary edge. 0: off.
+  double needle_angle_deg = 0;
+  //! Strip one-triangle-wide spikes and strands of a ragged scan border (hair): faces with two
+  //! boundary edges are removed until none is left, and at a pinch vertex (several face fans
+  //! touching at one point) all but the largest fan are removed.
+  bool remove_spikes = false;
+  //! With remove_spikes: the border is also followed tip_reach_mm back and forward from each
+  //! boundary vertex, and where the surface's angle between those chords is below tip_angle_deg
+  //! (a sharp convex tip at the scale of the output edges, which no good triangle fits) the
+  //! vertex's faces are removed, repeatedly. 0: off. `scanmesh remesh` uses the target edge.
+  double tip_reach_mm = 0;
+  double tip_angle_deg = 120;
 };
 struct PrepareStats {
   std::size_t components_removed = 0, faces_removed = 0, holes_filled = 0, faces_added = 0;
+  std::size_t degenerate_removed = 0, needles_welded = 0, caps_flipped = 0, caps_removed = 0;
+  std::size_t spike_faces_removed = 0, pinch_faces_removed = 0, tip_faces_removed = 0;
 };
 //! Returns the cleaned mesh (labels kept; a hole's fan takes the label of its rim faces).
 Mesh prepare_input(const Mesh& input, const PrepareOptions& options, PrepareStats* stats = nullptr);
@@ -64,7 +80,13 @@ struct RemeshOptions {
   int n_area = 3;                 //!< area-based moves per flip sweep (§3.4)
   int n_step = 5;                 //!< outer rounds of area-based remeshing (§3.4)
   int drive_limit = 10;           //!< §3.8
-  int smoothing_passes = 10;      //!< final angle-based (or centroidal) passes (§3.5)
+  //! Regularisation's simple-edge flips from a priority queue (worst valence deviation first,
+  //! best flip of its star) instead of sweeps over the edges in index order.
+  bool regularize_queue = false;
+  //! Every operation is refused when a changed face would cut a face at one of its corners
+  //! (folds, local self-intersections); off only to measure what it costs and prevents.
+  bool prevent_intersections = true;
+  int smoothing_passes = 10;  //!< final angle-based (or centroidal) passes (§3.5)
   //! Called with (phase name, fraction done in [0, 1]); may be empty.
   std::function<void(const std::string&, double)> progress;
 };
@@ -77,6 +99,9 @@ struct RemeshStats {
   std::size_t rejected_error = 0;     //!< operations undone by E_dist / E_glatt
   std::size_t rejected_topology = 0;  //!< link condition / skeleton rules
   std::size_t skeleton_splits = 0, skeleton_collapses = 0;  //!< (4.5) / (4.4)
+  //! Faces of the final mesh that cut another face before the repair pass (0 when prevention in
+  //! the operators sufficed; the report's self_intersections counts what is left after it).
+  std::size_t intersecting_faces_before_repair = 0;
   double seconds_setup = 0, seconds_adapt = 0, seconds_count = 0, seconds_regularize = 0,
          seconds_smooth = 0, seconds_total = 0;
 };

@@ -24,6 +24,10 @@ struct RemeshQuality {
   std::array<std::size_t, 12> angle_histogram{};         //!< min angle, 5 deg bins over [0, 60]
   std::size_t valence_counted = 0, valence_optimal = 0;  //!< free + skeleton vertices
   double fraction_irregular = 0;
+  //! Where the triangles with min angle < 30 deg are, by their most constrained corner: a branch
+  //! vertex, else a boundary skeleton vertex (1 side), else another skeleton vertex (feature
+  //! line or seam), else only free corners.
+  std::size_t bad_at_branch = 0, bad_at_boundary = 0, bad_at_skeleton = 0, bad_interior = 0;
   double hausdorff_out_to_in = 0, hausdorff_in_to_out = 0, hausdorff = 0, mean_distance = 0;
   double bbox_diagonal = 0;
   bool self_intersections_checked = false;
