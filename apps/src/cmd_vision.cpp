@@ -2,6 +2,7 @@
 // (docs/acquisition.md, docs/cli.md).
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 
@@ -26,17 +27,68 @@ sim::RigConfig load_rig(const std::string& path) {
 }
 
 struct CalibrateArgs {
+  std::string session;  //!< recorded calibration session (scan --calibration); empty with --sim
   bool sim = false;
   std::string rig, out;
   int handheld = 16;
   double angle_step_deg = 5.0, angle_max_deg = 70.0;
 };
 
+int report_calibration(const CalibrationReport& rep, const std::string& out) {
+  const Calibration& c = rep.calibration;
+  c.write_yaml(out);
+  std::printf("calibrated from %d views (%d not found): %d corners, %d laser points\n",
+              rep.views_detected, rep.views_rejected, c.corners, c.laser_points);
+  std::printf("  reprojection RMS %.4f px (OpenCV initial %.4f px), laser RMS %.4f mm\n",
+              c.reprojection_rms_px, rep.opencv_rms_px, c.laser_rms_mm);
+  std::printf("  fx %.3f +- %.3f  fy %.3f +- %.3f  cx %.3f +- %.3f  cy %.3f +- %.3f\n", c.camera.fx,
+              c.uncertainty.fx, c.camera.fy, c.uncertainty.fy, c.camera.cx, c.uncertainty.cx,
+              c.camera.cy, c.uncertainty.cy);
+  for (std::size_t k = 0; k < c.lasers.size(); ++k)
+    std::printf("  laser %s: normal +- %.4f deg, distance %.3f +- %.4f mm\n",
+                c.lasers[k].name.c_str(), c.uncertainty.laser_normal_deg[k],
+                c.lasers[k].distance_mm, c.uncertainty.laser_distance_mm[k]);
+  std::printf("  axis direction +- %.4f deg, axis point +- %.4f mm\n",
+              c.uncertainty.axis_direction_deg, c.uncertainty.axis_point_mm);
+  std::printf("wrote %s\n", out.c_str());
+  return kSuccess;
+}
+
+// A recorded calibration session: every step is one view (its laser-off frame and one frame per
+// laser); the pattern and the board poses come from session.json.
+int run_calibrate_session(const CalibrateArgs& a) {
+  const SessionReader session(a.session);
+  const SessionHeader& h = session.manifest().header;
+  if (!h.calibration)
+    throw FileFormatError(std::filesystem::path(a.session) / "session.json",
+                          "not a calibration session (record one with scan --calibration)");
+  if (!session.complete())
+    std::cerr << "scanmesh: warning: " << a.session << " is incomplete (" << session.step_count()
+              << " of " << h.step_count << " steps); 'scan --calibration --resume' completes it\n";
+  const CalibrationSessionInfo& info = *h.calibration;
+  std::vector<CalibrationView> views;
+  Progress progress("reading views");
+  for (std::size_t i = 0; i < session.step_count(); ++i) {
+    ScanStep s = session.step(i);
+    const std::size_t pose = info.step(i).first;
+    views.push_back({std::move(s.laser_off), info.poses[pose].on_platter, s.angle_rad,
+                     std::move(s.laser_on), static_cast<int>(pose)});
+    progress.update(static_cast<int>(i + 1), static_cast<int>(session.step_count()));
+  }
+  progress.finish();
+  CalibrationOptions opt;
+  opt.pattern = {info.pattern.corner_cols, info.pattern.corner_rows, info.pattern.square_mm,
+                 info.pattern.bottom_mm};
+  return report_calibration(calibrate_scanner(views, h.laser_count, opt), a.out);
+}
+
 int run_calibrate(const CalibrateArgs& a) {
+  if (!a.session.empty() && a.sim)
+    throw InvalidInputError("calibrate: give a calibration SESSION folder or --sim, not both");
+  if (!a.session.empty()) return run_calibrate_session(a);
   if (!a.sim)
     throw InvalidInputError(
-        "calibrate: only --sim is available on this branch (session folders come with the "
-        "devices branch)");
+        "calibrate: give a calibration SESSION folder (scan --calibration) or --sim");
   const sim::RigConfig rig = load_rig(a.rig);
   // The pattern mode renders only the board and the platter; the scene is unused.
   const sim::Scene unused = sim::Scene::from_yaml_text(
@@ -51,30 +103,14 @@ int run_calibrate(const CalibrateArgs& a) {
   const auto shots = sim::render_calibration_shots(camera, plan);
   progress.finish();
   std::vector<CalibrationView> views;
-  for (const auto& s : shots) views.push_back({s.image, s.on_turntable, s.angle_rad, s.laser_on});
+  for (const auto& s : shots)
+    views.push_back({s.image, s.on_turntable, s.angle_rad, s.laser_on, s.placement});
   CalibrationOptions opt;
   opt.pattern.corner_cols = plan.board.corner_cols;
   opt.pattern.corner_rows = plan.board.corner_rows;
   opt.pattern.square_mm = plan.board.square_mm;
   opt.pattern.bottom_mm = plan.platter_bottom_mm;
-  const CalibrationReport rep = calibrate_scanner(views, camera.laser_count(), opt);
-  const Calibration& c = rep.calibration;
-  c.write_yaml(a.out);
-  std::printf("calibrated from %d views (%d not found): %d corners, %d laser points\n",
-              rep.views_detected, rep.views_rejected, c.corners, c.laser_points);
-  std::printf("  reprojection RMS %.4f px (OpenCV initial %.4f px), laser RMS %.4f mm\n",
-              c.reprojection_rms_px, rep.opencv_rms_px, c.laser_rms_mm);
-  std::printf("  fx %.3f +- %.3f  fy %.3f +- %.3f  cx %.3f +- %.3f  cy %.3f +- %.3f\n", c.camera.fx,
-              c.uncertainty.fx, c.camera.fy, c.uncertainty.fy, c.camera.cx, c.uncertainty.cx,
-              c.camera.cy, c.uncertainty.cy);
-  for (std::size_t k = 0; k < c.lasers.size(); ++k)
-    std::printf("  laser %s: normal +- %.4f deg, distance %.3f +- %.4f mm\n",
-                c.lasers[k].name.c_str(), c.uncertainty.laser_normal_deg[k],
-                c.lasers[k].distance_mm, c.uncertainty.laser_distance_mm[k]);
-  std::printf("  axis direction +- %.4f deg, axis point +- %.4f mm\n",
-              c.uncertainty.axis_direction_deg, c.uncertainty.axis_point_mm);
-  std::printf("wrote %s\n", a.out.c_str());
-  return kSuccess;
+  return report_calibration(calibrate_scanner(views, camera.laser_count(), opt), a.out);
 }
 
 struct ReconstructCliArgs {
@@ -125,7 +161,10 @@ int run_reconstruct_from(const ScanStepSource& source, const ReconstructArgs& a)
 void register_vision_commands(CLI::App& app, CommandList& commands) {
   auto cal = std::make_shared<CalibrateArgs>();
   auto* cal_cmd = app.add_subcommand(
-      "calibrate", "Calibrate camera, lasers and turntable axis (simulated rig: --sim)");
+      "calibrate",
+      "Calibrate camera, lasers and turntable axis from a calibration session (or --sim)");
+  cal_cmd->add_option("session", cal->session,
+                      "Calibration session folder (scan --calibration --out SESSION)");
   cal_cmd->add_flag("--sim", cal->sim, "Render the calibration views with the simulated camera");
   cal_cmd->add_option("--rig", cal->rig, "Simulated rig YAML (default: built-in Ciclop-like)")
       ->check(CLI::ExistingFile);
@@ -177,6 +216,9 @@ void register_vision_commands(CLI::App& app, CommandList& commands) {
          if (!rec->session.empty()) {
            // Replay: the recorded steps go through the same pipeline with no device.
            const SessionReader session(rec->session);
+           if (session.manifest().header.calibration)
+             throw FileFormatError(std::filesystem::path(rec->session) / "session.json",
+                                   "is a calibration session: use 'scanmesh calibrate' on it");
            if (!session.complete())
              std::cerr << "scanmesh: warning: " << rec->session << " is incomplete ("
                        << session.step_count() << " steps); 'scan --resume' completes it\n";

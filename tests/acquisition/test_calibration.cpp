@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <sstream>
 #include <filesystem>
 #include <numbers>
 
@@ -19,7 +21,8 @@ constexpr double kDeg = 180.0 / std::numbers::pi;
 
 std::vector<CalibrationView> to_views(const std::vector<sim::CalibrationShot>& shots) {
   std::vector<CalibrationView> v;
-  for (const auto& s : shots) v.push_back({s.image, s.on_turntable, s.angle_rad, s.laser_on});
+  for (const auto& s : shots)
+    v.push_back({s.image, s.on_turntable, s.angle_rad, s.laser_on, s.placement});
   return v;
 }
 
@@ -28,9 +31,23 @@ class CalibrationSim : public ::testing::Test {
   static void SetUpTestSuite() {
     scene_ = new sim::Scene(sim::Scene::from_yaml_text(
         "objects:\n  - {type: sphere, name: unused, center: [0, 0, 0], radius: 1}\n", "unused"));
-    camera_ = new sim::TurntableCamera(*scene_, sim::builtin_ciclop_rig());
+    sim::RigConfig rig = sim::builtin_ciclop_rig();
     sim::CalibrationPlan plan;  // platter views every 5 degrees within +-70
-    for (int d = -70; d <= 70; d += 5)
+    int step = 5;
+    if (const char* e = std::getenv("CAL9_STEP")) step = std::atoi(e);
+    if (const char* e = std::getenv("CAL9_SEED")) rig.seed = std::atoi(e);
+    if (const char* e = std::getenv("CAL9_HH")) plan.handheld_views = std::atoi(e);
+    if (const char* e = std::getenv("CAL9_PL")) {
+      std::istringstream in(e);
+      double o, sh, t;
+      char c;
+      while (in >> o >> c >> sh >> c >> t) {
+        plan.placements.push_back({o, sh, t * std::numbers::pi / 180});
+        in >> c;
+      }
+    }
+    camera_ = new sim::TurntableCamera(*scene_, rig);
+    for (int d = -70; d <= 70; d += step)
       plan.platter_angles_rad.push_back(d * std::numbers::pi / 180);
     shots_ = new std::vector<sim::CalibrationShot>(sim::render_calibration_shots(*camera_, plan));
     report_ = new CalibrationReport(calibrate_scanner(to_views(*shots_), 2));
@@ -99,6 +116,12 @@ TEST_F(CalibrationSim, RecoversIntrinsicsLasersAndAxis) {
   }
   const double height_err =
       c.axis_direction.dot(c.axis_origin_mm - cam_from_rig * Eigen::Vector3d::Zero());
+  {
+    const Eigen::Vector3d q = cam_from_rig * Eigen::Vector3d(0, 0, 100);
+    const Eigen::Vector3d d = q - c.axis_origin_mm;
+    const Eigen::Vector3d e = d - d.dot(c.axis_direction) * c.axis_direction;
+    std::printf("  axis offset at z=100 in camera frame: %.4f %.4f %.4f\n", e.x(), e.y(), e.z());
+  }
   std::printf(
       "  axis: direction off by %.4f deg (sigma %.4f), line off by %.4f mm (sigma %.4f), "
       "platter height off by %.4f mm\n",
