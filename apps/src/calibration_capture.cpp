@@ -68,6 +68,12 @@ CalibrationSessionInfo make_calibration_plan(const CalibrationPlanArgs& a) {
   return info;
 }
 
+std::vector<sim::BoardPlacement> builtin_platter_placements(int n) {
+  std::vector<sim::BoardPlacement> p;
+  for (int k = 0; k < n && k < kMaxPlatterPoses; ++k) p.push_back(kPlatterPoses[k].placement);
+  return p;
+}
+
 sim::RigConfig scaled_ciclop_rig(int width, int height) {
   sim::RigConfig rig = sim::builtin_ciclop_rig();
   const double sx = static_cast<double>(width) / rig.width;

@@ -24,6 +24,9 @@ constexpr int kMaxPlatterPoses = 5;
 //! through -max..max in steps) and the hand-held views. Throws InvalidInputError.
 CalibrationSessionInfo make_calibration_plan(const CalibrationPlanArgs& args);
 
+//! The first n platter placements of the plan (the simulated board of `calibrate --sim` too).
+std::vector<sim::BoardPlacement> builtin_platter_placements(int n);
+
 //! The built-in rig of the simulation at a frame size (intrinsics scale with the sensor).
 sim::RigConfig scaled_ciclop_rig(int width, int height);
 

@@ -6,6 +6,7 @@
 #include <iostream>
 #include <memory>
 
+#include "calibration_capture.h"
 #include "cli_support.h"
 #include "commands.h"
 #include "scanmesh/acquisition/calibration.h"
@@ -30,8 +31,8 @@ struct CalibrateArgs {
   std::string session;  //!< recorded calibration session (scan --calibration); empty with --sim
   bool sim = false;
   std::string rig, out;
-  int handheld = 16;
-  double angle_step_deg = 5.0, angle_max_deg = 70.0;
+  int handheld = 16, poses = 3;
+  double angle_step_deg = 10.0, angle_max_deg = 70.0;
 };
 
 int report_calibration(const CalibrationReport& rep, const std::string& out) {
@@ -96,6 +97,7 @@ int run_calibrate(const CalibrateArgs& a) {
   sim::TurntableCamera camera(unused, rig);
   sim::CalibrationPlan plan;
   plan.handheld_views = a.handheld;
+  plan.placements = builtin_platter_placements(a.poses);
   for (double d = -a.angle_max_deg; d <= a.angle_max_deg + 1e-9; d += a.angle_step_deg)
     plan.platter_angles_rad.push_back(d * kDeg);
   Progress progress("rendering calibration views");
@@ -171,6 +173,9 @@ void register_vision_commands(CLI::App& app, CommandList& commands) {
   cal_cmd->add_option("--handheld", cal->handheld, "Hand-held board views")
       ->capture_default_str()
       ->check(CLI::Range(0, 100));
+  cal_cmd->add_option("--poses", cal->poses, "--sim: board placements on the platter")
+      ->capture_default_str()
+      ->check(CLI::Range(1, kMaxPlatterPoses));
   cal_cmd->add_option("--angle-step", cal->angle_step_deg, "Platter views every this (deg)")
       ->capture_default_str()
       ->check(CLI::Range(1.0, 90.0));
