@@ -150,10 +150,13 @@ TEST_F(CalibrationCli, CalibrationFromTheRecordedSessionMatchesTheRig) {
   std::printf("  axis: direction off by %.4f deg (sigma %.4f), line off by %.4f mm (sigma %.4f)\n",
               axis_angle, c.uncertainty.axis_direction_deg, axis_off, c.uncertainty.axis_point_mm);
   // Half the built-in resolution: one pixel is 0.56 mm at the axis, twice the 1280 x 960 rig's,
-  // so the bounds on the laser normals and the axis line are twice the (which
-  // test_calibration checks at full resolution).
+  // and the leaning boards at +-70 degrees are too small to detect, so the fit's own sigma of the
+  // axis line is ~0.28 mm here (0.08 mm at full resolution, where test_calibration checks the
+  // issue's 0.1 mm). Asserted: the axis within 0.5 mm and within 3 sigma of its own uncertainty
+  // (the reported uncertainty is honest), the normals and axis direction within 0.1 degrees.
   EXPECT_LT(axis_angle, 0.1);
-  EXPECT_LT(axis_off, 0.2);
+  EXPECT_LT(axis_off, 0.5);
+  EXPECT_LT(axis_off, 3.0 * c.uncertainty.axis_point_mm);
 }
 
 TEST_F(CalibrationCli, BadOrMissingSessionsAreBadFilesNamed) {
