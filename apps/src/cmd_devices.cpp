@@ -173,18 +173,20 @@ int run_scan(const ScanArgs& a) {
       throw InvalidInputError("--resume: '" + out.string() + "' is " +
                               (h.calibration ? "a calibration session: add --calibration"
                                              : "a scan session: drop --calibration"));
-    if (h.calibration && !session->complete()) {
-      // The board may have moved while the scan was stopped: the interrupted pose starts over.
-      session->rewind(h.calibration->first_step(h.calibration->step(session->steps_done()).first));
-      cal_plan = h.calibration;
-    }
-    if (h.step_count != planned_steps || h.laser_count != a.lasers || h.camera.width != width ||
-        h.camera.height != height || h.camera.format != format || h.storage != storage ||
-        h.simulated != a.sim)
+    // A calibration session resumes with its own recorded plan (--poses etc. need not be given
+    // again).
+    if (h.calibration) cal_plan = h.calibration;
+    if ((!h.calibration && h.step_count != planned_steps) || h.laser_count != a.lasers ||
+        h.camera.width != width || h.camera.height != height || h.camera.format != format ||
+        h.storage != storage || h.simulated != a.sim)
       throw InvalidInputError(
           "--resume: steps, lasers, size, format, storage and --sim must "
           "match the session in '" +
           out.string() + "'");
+    if (h.calibration && !session->complete()) {
+      // The board may have moved while the scan was stopped: the interrupted pose starts over.
+      session->rewind(h.calibration->first_step(h.calibration->step(session->steps_done()).first));
+    }
     if (session->complete()) {
       std::cout << "scan: " << out.string() << " is already complete (" << h.step_count
                 << " steps)\n";

@@ -15,6 +15,7 @@
 #include <numbers>
 #include <string>
 
+#include "../acquisition/session_compare.h"
 #include "scanmesh/acquisition/calibration.h"
 #include "scanmesh/acquisition/session.h"
 #include "scanmesh/sim/turntable_camera.h"
@@ -203,6 +204,33 @@ TEST_F(CalibrationCli, BadOrMissingSessionsAreBadFilesNamed) {
   EXPECT_EQ(r.exit_code, 4) << r.output;
   EXPECT_NE(r.output.find("000005_off.png"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir / "bad.yaml"));
+}
+
+TEST(CalibrationCliResume, InterruptedPoseStartsOverAndGivesTheSameSession) {
+  // Two placements, 5 angles each (steps 0..4, 5..9). Board commands: 3 at connect, then 7 per
+  // step; command 3 + 7 * 6 + 3 = 48 is the move of step 6, inside pose 2.
+  const std::string cal =
+      "scan --sim --calibration --poses 2 --pose-angle-step 35 --size 64x48 --time-scale 0.01 "
+      "--settle 0.01";
+  const fs::path reference = scratch("resume_reference");
+  ASSERT_EQ(run(cal + " --out " + reference.string()).exit_code, 0);
+  const fs::path dir = scratch("resume");
+  const RunResult failed = run(cal + " --out " + dir.string() + " --sim-fault board-unplug@48");
+  EXPECT_EQ(failed.exit_code, 7) << failed.output;
+  EXPECT_NE(failed.output.find("step 6 of 10"), std::string::npos) << failed.output;
+  EXPECT_EQ(read_session_manifest(dir).steps.size(), 6u);
+  // Resuming needs only --calibration: the plan is the session's own.
+  const RunResult resumed =
+      run("scan --sim --calibration --size 64x48 --time-scale 0.01 --settle 0.01 --resume --out " +
+          dir.string());
+  EXPECT_EQ(resumed.exit_code, 0) << resumed.output;
+  EXPECT_NE(resumed.output.find("resumed at step 5"), std::string::npos) << resumed.output;
+  EXPECT_TRUE(test::sessions_identical(dir, reference));
+  // A scan session cannot be resumed as a calibration session.
+  const RunResult wrong =
+      run("scan --sim --size 64x48 --time-scale 0.01 --resume --out " + dir.string());
+  EXPECT_EQ(wrong.exit_code, 3) << wrong.output;
+  fs::remove_all(dir.parent_path());
 }
 
 }  // namespace
