@@ -260,34 +260,51 @@ CalibrationReport calibrate_scanner(const std::vector<CalibrationView>& views, i
       pose[j][3 + q] = tvecs[j].at<double>(q);
     }
 
-  // 3. Initial axis from the platter views: relative rotations give the direction, the
-  // positions of the board origin the point.
-  std::vector<int> tt;  // indices into `used` of platter views
-  for (std::size_t j = 0; j < used.size(); ++j)
-    if (views[used[j]].on_turntable) tt.push_back(static_cast<int>(j));
+  // 3. Initial axis from the platter views: relative rotations within each placement give the
+  // direction, the positions of the board origin the point.
+  std::vector<int> tt;            // indices into `used` of platter views
+  std::vector<int> placement_of;  // per index into `used`: dense placement index, -1 hand-held
+  std::vector<int> placement_ids;
+  for (std::size_t j = 0; j < used.size(); ++j) {
+    placement_of.push_back(-1);
+    const CalibrationView& v = views[used[j]];
+    if (!v.on_turntable) continue;
+    tt.push_back(static_cast<int>(j));
+    auto it = std::find(placement_ids.begin(), placement_ids.end(), v.placement);
+    if (it == placement_ids.end()) {
+      placement_ids.push_back(v.placement);
+      it = placement_ids.end() - 1;
+    }
+    placement_of[j] = static_cast<int>(it - placement_ids.begin());
+  }
   if (tt.size() < 3)
     throw InvalidInputError("calibration: the board was found standing on the platter in " +
                             std::to_string(tt.size()) + " views; at least 3 are needed");
-  const int ref = tt.front();
-  const double theta_ref = views[used[ref]].angle_rad;
+  const int n_place = static_cast<int>(placement_ids.size());
+  std::vector<int> ref_of(n_place, -1);  // first platter view of each placement
+  for (int j : tt)
+    if (ref_of[placement_of[j]] < 0) ref_of[placement_of[j]] = j;
   auto rot_of = [&](int j) { return rodrigues(Vector3d(pose[j][0], pose[j][1], pose[j][2])); };
   auto tr_of = [&](int j) { return Vector3d(pose[j][3], pose[j][4], pose[j][5]); };
   Vector3d axis = Vector3d::Zero();
   for (int j : tt) {
-    const double dtheta = views[used[j]].angle_rad - theta_ref;
+    const int ref = ref_of[placement_of[j]];
+    const double dtheta = views[used[j]].angle_rad - views[used[ref]].angle_rad;
     if (std::abs(dtheta) < 1e-3) continue;
     const Vector3d aa = to_angle_axis(rot_of(j) * rot_of(ref).transpose());
     axis += (dtheta > 0 ? 1.0 : -1.0) * aa.normalized() * std::abs(dtheta);
   }
   if (!(axis.norm() > 0))
-    throw InvalidInputError("calibration: the platter views all have the same angle");
+    throw InvalidInputError(
+        "calibration: the platter views of each board placement all have the same angle");
   axis.normalize();
   Vector3d point;
   {
     Eigen::MatrixXd a(3 * tt.size() + 1, 3);
     Eigen::VectorXd b(3 * tt.size() + 1);
     for (std::size_t q = 0; q < tt.size(); ++q) {
-      const double dtheta = views[used[tt[q]]].angle_rad - theta_ref;
+      const int ref = ref_of[placement_of[tt[q]]];
+      const double dtheta = views[used[tt[q]]].angle_rad - views[used[ref]].angle_rad;
       const Eigen::Matrix3d r = Eigen::AngleAxisd(dtheta, axis).toRotationMatrix();
       a.block<3, 3>(3 * q, 0) = Eigen::Matrix3d::Identity() - r;
       b.segment<3>(3 * q) = tr_of(tt[q]) - r * tr_of(ref);
@@ -298,12 +315,15 @@ CalibrationReport calibrate_scanner(const std::vector<CalibrationView>& views, i
   }
   double axis_p[3] = {axis.x(), axis.y(), axis.z()};
   double point_p[3] = {point.x(), point.y(), point.z()};
-  double pose0[6];
-  {
+  // Board pose at turntable angle 0, one per placement.
+  std::vector<std::array<double, 6>> pose0s(n_place);
+  for (int pk = 0; pk < n_place; ++pk) {
+    const int ref = ref_of[pk];
+    const double theta_ref = views[used[ref]].angle_rad;
     const Eigen::Matrix3d back = Eigen::AngleAxisd(-theta_ref, axis).toRotationMatrix();
     const Vector3d aa = to_angle_axis(back * rot_of(ref));
     const Vector3d t0 = back * (tr_of(ref) - point) + point;
-    for (int q = 0; q < 3; ++q) pose0[q] = aa[q], pose0[3 + q] = t0[q];
+    for (int q = 0; q < 3; ++q) pose0s[pk][q] = aa[q], pose0s[pk][3 + q] = t0[q];
   }
   auto board_pose_at = [&](const double* in_pose0, const double* ax, const double* pt, double theta,
                            Vector3d* origin, Vector3d* normal) {
@@ -321,6 +341,7 @@ CalibrationReport calibrate_scanner(const std::vector<CalibrationView>& views, i
     double theta;
     Vector2d uv;
     int handheld_view;  // index into `used` of a hand-held view, -1 for platter views
+    int placement;      // dense placement index of a platter view
   };
   std::vector<LaserObs> laser_obs;
   std::vector<std::vector<Vector3d>> laser_pts(laser_count);
@@ -330,7 +351,7 @@ CalibrationReport calibrate_scanner(const std::vector<CalibrationView>& views, i
     if (static_cast<int>(v.laser_on.size()) != laser_count) continue;
     Vector3d o, nb;
     if (v.on_turntable) {
-      board_pose_at(pose0, axis_p, point_p, v.angle_rad, &o, &nb);
+      board_pose_at(pose0s[placement_of[j]].data(), axis_p, point_p, v.angle_rad, &o, &nb);
     } else {
       o = tr_of(j);
       nb = rot_of(j).col(2);
@@ -356,7 +377,8 @@ CalibrationReport calibrate_scanner(const std::vector<CalibrationView>& views, i
         for (int xx = std::max(0, xc - 40); xx <= std::min(w - 1, xc + 40); ++xx)
           bright = std::max<int>(bright, v.image.at(xx, p.row)[v.image.channels > 1 ? 1 : 0]);
         if (v.image.at(xc, p.row)[v.image.channels > 1 ? 1 : 0] < bright / 2) continue;
-        laser_obs.push_back({l, v.angle_rad, Vector2d(p.u, p.row), v.on_turntable ? -1 : j});
+        laser_obs.push_back(
+            {l, v.angle_rad, Vector2d(p.u, p.row), v.on_turntable ? -1 : j, placement_of[j]});
         laser_pts[l].push_back(x);
       }
     }
@@ -387,7 +409,7 @@ CalibrationReport calibrate_scanner(const std::vector<CalibrationView>& views, i
         problem.AddResidualBlock(
             new ceres::AutoDiffCostFunction<TurntableCorner, 2, 9, 6, 3, 3>(
                 new TurntableCorner{obs, xb, v.angle_rad, opt.corner_sigma_px}),
-            loss, in, pose0, axis_p, point_p);
+            loss, in, pose0s[placement_of[j]].data(), axis_p, point_p);
       } else {
         problem.AddResidualBlock(new ceres::AutoDiffCostFunction<HandheldCorner, 2, 9, 6>(
                                      new HandheldCorner{obs, xb, opt.corner_sigma_px}),
@@ -405,8 +427,8 @@ CalibrationReport calibrate_scanner(const std::vector<CalibrationView>& views, i
     else
       problem.AddResidualBlock(new ceres::AutoDiffCostFunction<LaserOnBoard, 1, 9, 6, 3, 3, 3, 1>(
                                    new LaserOnBoard{o.uv, o.theta, opt.laser_sigma_mm}),
-                               loss, in, pose0, axis_p, point_p, lnormal[o.laser].data(),
-                               &ldist[o.laser]);
+                               loss, in, pose0s[o.placement].data(), axis_p, point_p,
+                               lnormal[o.laser].data(), &ldist[o.laser]);
   }
   problem.AddResidualBlock(new ceres::AutoDiffCostFunction<AxisGauge, 1, 3, 3>(new AxisGauge),
                            nullptr, axis_p, point_p);
@@ -438,7 +460,8 @@ CalibrationReport calibrate_scanner(const std::vector<CalibrationView>& views, i
         const Vector3d xb(board[c].x, board[c].y, 0.0);
         double r[2];
         if (v.on_turntable)
-          TurntableCorner{obs, xb, v.angle_rad, 1.0}(in, pose0, axis_p, point_p, r);
+          TurntableCorner{obs, xb, v.angle_rad, 1.0}(in, pose0s[placement_of[j]].data(), axis_p,
+                                                     point_p, r);
         else
           HandheldCorner{obs, xb, 1.0}(in, pose[j].data(), r);
         sse_corner += r[0] * r[0] + r[1] * r[1];
@@ -450,8 +473,8 @@ CalibrationReport calibrate_scanner(const std::vector<CalibrationView>& views, i
         HandheldLaser{o.uv, 1.0}(in, pose[o.handheld_view].data(), lnormal[o.laser].data(),
                                  &ldist[o.laser], &r);
       else
-        LaserOnBoard{o.uv, o.theta, 1.0}(in, pose0, axis_p, point_p, lnormal[o.laser].data(),
-                                         &ldist[o.laser], &r);
+        LaserOnBoard{o.uv, o.theta, 1.0}(in, pose0s[o.placement].data(), axis_p, point_p,
+                                         lnormal[o.laser].data(), &ldist[o.laser], &r);
       sse_laser += r * r;
     }
   }
@@ -466,13 +489,18 @@ CalibrationReport calibrate_scanner(const std::vector<CalibrationView>& views, i
   // The rotation model uses +theta about `a`; the platter turns counter-clockwise seen from
   // above, so `a` is already the up direction unless the angles were given clockwise.
   cal.axis_direction = a;
-  // Platter top: the lowest corner row is bottom_mm above it.
+  // Platter top: every placement's bottom edge (bottom_mm below the lowest corner row, along the
+  // board) rests on it; the mean over the placements.
   {
-    double low[3];
-    const double xb[3] = {0.0, (pat.corner_rows - 1) * pat.square_mm, 0.0};
-    turntable_point(pose0, axis_p, point_p, 0.0, xb, low);
-    const Vector3d lowest(low[0], low[1], low[2]);
-    cal.axis_origin_mm = p + (a.dot(lowest - p) - pat.bottom_mm) * a;
+    double height = 0;
+    const double xb[3] = {0.5 * (pat.corner_cols - 1) * pat.square_mm,
+                          (pat.corner_rows - 1) * pat.square_mm + pat.bottom_mm, 0.0};
+    for (int pk = 0; pk < n_place; ++pk) {
+      double e[3];
+      turntable_point(pose0s[pk].data(), axis_p, point_p, 0.0, xb, e);
+      height += a.dot(Vector3d(e[0], e[1], e[2]) - p);
+    }
+    cal.axis_origin_mm = p + (height / n_place) * a;
   }
   for (int l = 0; l < laser_count; ++l)
     cal.lasers.push_back({l == 0 && laser_count == 2   ? "left"

@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -65,8 +66,7 @@ T get(const json& j, const char* key, const fs::path& file) {
     if (!v.is_number_integer()) throw wrong_type();
     const bool fits = v.is_number_unsigned() ? std::in_range<T>(v.get<std::uint64_t>())
                                              : std::in_range<T>(v.get<std::int64_t>());
-    if (!fits)
-      throw FileFormatError(file, std::string("field '") + key + "' is out of range");
+    if (!fits) throw FileFormatError(file, std::string("field '") + key + "' is out of range");
     return v.is_number_unsigned() ? static_cast<T>(v.get<std::uint64_t>())
                                   : static_cast<T>(v.get<std::int64_t>());
   } else {
@@ -133,9 +133,70 @@ StepRecord step_from_json(const json& j, const SessionHeader& h, const fs::path&
   return s;
 }
 
+CalibrationSessionInfo calibration_from_json(const json& j, const fs::path& file) {
+  CalibrationSessionInfo c;
+  const json pat = get<json>(j, "pattern", file);
+  if (get<std::string>(pat, "type", file) != "chessboard")
+    throw FileFormatError(file, "calibration pattern type must be chessboard");
+  c.pattern.corner_cols = get<int>(pat, "corner_cols", file);
+  c.pattern.corner_rows = get<int>(pat, "corner_rows", file);
+  c.pattern.square_mm = get<double>(pat, "square_mm", file);
+  c.pattern.bottom_mm = get<double>(pat, "bottom_mm", file);
+  if (c.pattern.corner_cols < 3 || c.pattern.corner_rows < 3 || c.pattern.corner_cols > 100 ||
+      c.pattern.corner_rows > 100)
+    throw FileFormatError(file, "calibration pattern needs 3..100 inner corners each way");
+  if (!(c.pattern.square_mm > 0 && c.pattern.square_mm < 1000) ||
+      !(std::abs(c.pattern.bottom_mm) < 1000))
+    throw FileFormatError(file, "calibration pattern square_mm or bottom_mm is impossible");
+  const json poses = get<json>(j, "poses", file);
+  if (!poses.is_array() || poses.empty() || poses.size() > kMaxSteps)
+    throw FileFormatError(file, "calibration poses must be a non-empty list");
+  for (const json& p : poses) {
+    CalibrationSessionInfo::Pose pose;
+    const std::string placement = get<std::string>(p, "placement", file);
+    if (placement != "platter" && placement != "handheld")
+      throw FileFormatError(file, "calibration pose placement must be platter or handheld");
+    pose.on_platter = placement == "platter";
+    pose.description = get<std::string>(p, "description", file);
+    const json angles = get<json>(p, "angles_rad", file);
+    if (!angles.is_array() || angles.empty() || angles.size() > kMaxSteps)
+      throw FileFormatError(file, "a calibration pose needs a non-empty angles_rad list");
+    for (const json& a : angles) {
+      if (!a.is_number()) throw FileFormatError(file, "calibration angles must be numbers");
+      const double v = a.get<double>();
+      if (!std::isfinite(v) || std::abs(v) > 100.0)
+        throw FileFormatError(file, "calibration angle is not finite or beyond +-100 rad");
+      pose.angles_rad.push_back(v);
+    }
+    c.poses.push_back(std::move(pose));
+  }
+  return c;
+}
+
 }  // namespace
 
+std::size_t CalibrationSessionInfo::step_count() const {
+  std::size_t n = 0;
+  for (const auto& p : poses) n += p.angles_rad.size();
+  return n;
+}
+
+std::pair<std::size_t, double> CalibrationSessionInfo::step(std::size_t i) const {
+  for (std::size_t k = 0; k < poses.size(); ++k) {
+    if (i < poses[k].angles_rad.size()) return {k, poses[k].angles_rad[i]};
+    i -= poses[k].angles_rad.size();
+  }
+  throw InvalidInputError("calibration session: no such step");
+}
+
+std::size_t CalibrationSessionInfo::first_step(std::size_t pose) const {
+  std::size_t n = 0;
+  for (std::size_t k = 0; k < pose && k < poses.size(); ++k) n += poses[k].angles_rad.size();
+  return n;
+}
+
 double SessionHeader::step_angle(std::size_t i) const {
+  if (calibration) return calibration->step(i).second;
   return start_angle_rad +
          2.0 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(step_count);
 }
@@ -162,6 +223,22 @@ std::string header_to_json(const SessionHeader& h) {
       {"device", h.board_device}, {"dialect", h.board_dialect}, {"firmware", h.board_firmware}};
   j["simulated"] = h.simulated;
   j["notes"] = h.notes;
+  if (h.calibration) {
+    const CalibrationSessionInfo& c = *h.calibration;
+    j["kind"] = "calibration";
+    json poses = json::array();
+    for (const auto& p : c.poses)
+      poses.push_back({{"placement", p.on_platter ? "platter" : "handheld"},
+                       {"description", p.description},
+                       {"angles_rad", p.angles_rad}});
+    j["calibration"] = {{"pattern",
+                         {{"type", "chessboard"},
+                          {"corner_cols", c.pattern.corner_cols},
+                          {"corner_rows", c.pattern.corner_rows},
+                          {"square_mm", c.pattern.square_mm},
+                          {"bottom_mm", c.pattern.bottom_mm}}},
+                        {"poses", poses}};
+  }
   return j.dump(2) + "\n";
 }
 
@@ -214,6 +291,17 @@ SessionManifest parse_session_manifest(std::string_view header_json, std::string
   hd.board_firmware = get<std::string>(board, "firmware", header_file);
   hd.simulated = get<bool>(h, "simulated", header_file);
   hd.notes = get<std::string>(h, "notes", header_file);
+  // "kind" is absent in scan sessions (and in every session written before calibration
+  // sessions existed).
+  const std::string kind = h.contains("kind") ? get<std::string>(h, "kind", header_file) : "scan";
+  if (kind == "calibration") {
+    hd.calibration = calibration_from_json(get<json>(h, "calibration", header_file), header_file);
+    if (hd.calibration->step_count() != hd.step_count)
+      throw FileFormatError(header_file,
+                            "step_count differs from the number of calibration pose angles");
+  } else if (kind != "scan") {
+    throw FileFormatError(header_file, "kind must be scan or calibration");
+  }
 
   std::size_t pos = 0;
   while (pos < steps_jsonl.size()) {
@@ -249,6 +337,8 @@ SessionWriter::SessionWriter(fs::path folder, SessionHeader header, std::size_t 
     : folder_(std::move(folder)), header_(std::move(header)), steps_done_(done) {}
 
 SessionWriter SessionWriter::create(const fs::path& folder, const SessionHeader& header) {
+  if (header.calibration && header.calibration->step_count() != header.step_count)
+    throw InvalidInputError("calibration session: step count differs from the poses' angles");
   if (header.step_count < 1 || header.step_count > kMaxSteps)
     throw InvalidInputError("step count must be 1.." + std::to_string(kMaxSteps));
   if (header.laser_count < 0 || header.laser_count > kMaxLasers)
@@ -286,6 +376,28 @@ SessionWriter SessionWriter::resume(const fs::path& folder) {
     if (temp || (numbered && step >= m.steps.size())) fs::remove(entry.path(), ec);
   }
   return SessionWriter(folder, m.header, m.steps.size());
+}
+
+void SessionWriter::rewind(std::size_t steps) {
+  if (steps >= steps_done_) return;
+  const fs::path file = folder_ / "steps.jsonl";
+  const auto bytes = read_file_bytes(file);
+  std::size_t pos = 0;
+  for (std::size_t n = 0; n < steps; ++n) {
+    const auto it = std::find(bytes.begin() + static_cast<std::ptrdiff_t>(pos), bytes.end(),
+                              std::uint8_t('\n'));
+    if (it == bytes.end()) throw FileFormatError(file, "fewer lines than recorded steps");
+    pos = static_cast<std::size_t>(it - bytes.begin()) + 1;
+  }
+  write_file_atomically(file, std::span<const std::uint8_t>(bytes.data(), pos));
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(folder_ / "frames", ec)) {
+    std::size_t step = 0;
+    if (std::sscanf(entry.path().filename().string().c_str(), "%zu_", &step) == 1 && step >= steps)
+      fs::remove(entry.path(), ec);
+  }
+  fsync_path(folder_ / "frames", true);
+  steps_done_ = steps;
 }
 
 void SessionWriter::append_step(double angle_rad, const std::vector<drivers::Frame>& frames) {

@@ -10,6 +10,7 @@
 #include <numbers>
 #include <thread>
 
+#include "calibration_capture.h"
 #include "cli_support.h"
 #include "commands.h"
 #include "scanmesh/acquisition/capture.h"
@@ -48,6 +49,10 @@ struct ScanArgs {
   int baud = 115200;
   double time_scale = 1.0;
   std::vector<std::string> faults;
+  // Calibration session (docs/acquisition.md, "Calibration sessions").
+  bool calibration = false;
+  CalibrationPlanArgs cal;
+  double pose_wait_s = -1;
 };
 
 struct ReplayArgs {
@@ -135,6 +140,13 @@ int run_scan(const ScanArgs& a) {
     throw InvalidInputError("a hardware scan needs --device CAM and --board BOARD");
   if (!a.faults.empty() && !a.sim) throw InvalidInputError("--sim-fault needs --sim");
   if (a.steps < 1 || a.steps > 100000) throw InvalidInputError("--steps must be 1..100000");
+  std::optional<CalibrationSessionInfo> cal_plan;
+  if (a.calibration) {
+    if (!a.scene.empty()) throw InvalidInputError("--calibration shows the board, not a --scene");
+    cal_plan = make_calibration_plan(a.cal);
+  }
+  const std::size_t planned_steps =
+      cal_plan ? cal_plan->step_count() : static_cast<std::size_t>(a.steps);
   if (a.lasers < 0 || a.lasers > 2) throw InvalidInputError("--lasers must be 0, 1 or 2");
   if (!(a.time_scale > 0) || a.time_scale > 1)
     throw InvalidInputError("--time-scale must be in (0, 1]");
@@ -157,13 +169,24 @@ int run_scan(const ScanArgs& a) {
   if (existing) {
     session.emplace(SessionWriter::resume(out));
     const SessionHeader& h = session->header();
-    if (h.step_count != static_cast<std::size_t>(a.steps) || h.laser_count != a.lasers ||
+    if (h.calibration.has_value() != a.calibration)
+      throw InvalidInputError("--resume: '" + out.string() + "' is " +
+                              (h.calibration ? "a calibration session: add --calibration"
+                                             : "a scan session: drop --calibration"));
+    // A calibration session resumes with its own recorded plan (--poses etc. need not be given
+    // again).
+    if (h.calibration) cal_plan = h.calibration;
+    if ((!h.calibration && h.step_count != planned_steps) || h.laser_count != a.lasers ||
         h.camera.width != width || h.camera.height != height || h.camera.format != format ||
         h.storage != storage || h.simulated != a.sim)
       throw InvalidInputError(
           "--resume: steps, lasers, size, format, storage and --sim must "
           "match the session in '" +
           out.string() + "'");
+    if (h.calibration && !session->complete()) {
+      // The board may have moved while the scan was stopped: the interrupted pose starts over.
+      session->rewind(h.calibration->first_step(h.calibration->step(session->steps_done()).first));
+    }
     if (session->complete()) {
       std::cout << "scan: " << out.string() << " is already complete (" << h.step_count
                 << " steps)\n";
@@ -176,6 +199,7 @@ int run_scan(const ScanArgs& a) {
   std::unique_ptr<sim::PtyBoard> pty;
   std::shared_ptr<sim::SimCamera> sim_camera;
   std::unique_ptr<drivers::Camera> camera;
+  std::shared_ptr<SimCalibrationBoard> sim_board;
   const double scale = a.sim ? a.time_scale : 1.0;
   drivers::BoardOptions board_options;
   board_options.feed_rate_deg_per_s = a.feed;
@@ -192,9 +216,11 @@ int run_scan(const ScanArgs& a) {
     for (const auto& f : a.faults) apply_sim_fault(f, bo, co);
     pty = std::make_unique<sim::PtyBoard>(bo);
     auto firmware = pty->shared_firmware();
+    if (cal_plan) sim_board = std::make_shared<SimCalibrationBoard>(*cal_plan, width, height);
     sim_camera = std::make_shared<sim::SimCamera>(
-        make_sim_renderer(a.scene, width, height), [firmware] { return firmware->angle_rad(); },
-        [firmware] { return firmware->laser_mask(); }, co);
+        sim_board ? sim_board->renderer() : make_sim_renderer(a.scene, width, height),
+        [firmware] { return firmware->angle_rad(); }, [firmware] { return firmware->laser_mask(); },
+        co);
     sim_camera->start_streaming();
     camera = std::make_unique<SimCameraSource>(sim_camera, format, 2.0);
     // Timeouts shrink with the simulated time, but not below what a loaded machine needs.
@@ -224,7 +250,8 @@ int run_scan(const ScanArgs& a) {
 
   if (!session) {
     SessionHeader h;
-    h.step_count = static_cast<std::size_t>(a.steps);
+    h.step_count = planned_steps;
+    h.calibration = cal_plan;
     h.laser_count = a.lasers;
     h.storage = storage;
     h.settle_s = a.settle_s;
@@ -242,6 +269,14 @@ int run_scan(const ScanArgs& a) {
   CaptureOptions options;
   options.settle_s = a.settle_s * scale;
   options.discard_frames = a.discard;
+  if (sim_board) {
+    const CalibrationSessionInfo info = *cal_plan;
+    options.before_step = [sim_board, info](std::size_t step) {
+      sim_board->set_pose(info.step(step).first);
+    };
+  } else if (cal_plan) {
+    options.before_step = pose_prompter(*cal_plan, a.pose_wait_s);
+  }
   options.progress = [&](std::size_t done, std::size_t total) {
     progress.update(static_cast<int>(done), static_cast<int>(total));
   };
@@ -369,6 +404,22 @@ void register_devices_commands(CLI::App& app, CommandList& commands) {
                    "Simulation: simulated time per real second (0.01 = 100x faster)")
       ->capture_default_str();
   scan->add_option("--sim-fault", s->faults, "Simulation fault KIND@N (repeatable)");
+  scan->add_flag(
+      "--calibration", s->calibration,
+      "Record a calibration session: the chessboard in several poses (calibrate reads it)");
+  scan->add_option("--poses", s->cal.platter_poses, "Calibration: board placements on the platter")
+      ->capture_default_str();
+  scan->add_option("--handheld", s->cal.handheld, "Calibration: hand-held board views")
+      ->capture_default_str();
+  scan->add_option("--pose-angle-step", s->cal.angle_step_deg,
+                   "Calibration: table angle step per placement (deg)")
+      ->capture_default_str();
+  scan->add_option("--pose-angle-max", s->cal.angle_max_deg,
+                   "Calibration: table turns within +- this per placement (deg)")
+      ->capture_default_str();
+  scan->add_option("--pose-wait", s->pose_wait_s,
+                   "Calibration on hardware: wait this many seconds at each pose instead of "
+                   "asking for Enter");
   commands.push_back({scan, [s] { return run_scan(*s); }});
 
   auto r = std::make_shared<ReplayArgs>();

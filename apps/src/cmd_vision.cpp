@@ -2,10 +2,12 @@
 // (docs/acquisition.md, docs/cli.md).
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <tuple>
 
+#include "calibration_capture.h"
 #include "cli_support.h"
 #include "commands.h"
 #include "scanmesh/acquisition/calibration.h"
@@ -28,44 +30,17 @@ sim::RigConfig load_rig(const std::string& path) {
 }
 
 struct CalibrateArgs {
+  std::string session;  //!< recorded calibration session (scan --calibration); empty with --sim
   bool sim = false;
   std::string rig, out;
   std::string size;  //!< simulated frame size (the built-in rig scaled); empty: the rig's
-  int handheld = 16;
-  double angle_step_deg = 5.0, angle_max_deg = 70.0;
+  int handheld = 16, poses = 3;
+  double angle_step_deg = 10.0, angle_max_deg = 70.0;
 };
 
-int run_calibrate(const CalibrateArgs& a) {
-  if (!a.sim)
-    throw InvalidInputError(
-        "calibrate: only --sim is available on this branch (session folders come with the "
-        "devices branch)");
-  if (!a.size.empty() && !a.rig.empty())
-    throw InvalidInputError("calibrate: give --rig or --size, not both");
-  const sim::RigConfig rig =
-      a.size.empty() ? load_rig(a.rig) : std::apply(scaled_ciclop_rig, parse_frame_size(a.size));
-  // The pattern mode renders only the board and the platter; the scene is unused.
-  const sim::Scene unused = sim::Scene::from_yaml_text(
-      "objects:\n  - {type: sphere, name: unused, center: [0, 0, -1000], radius: 1}\n", "unused");
-  sim::TurntableCamera camera(unused, rig);
-  sim::CalibrationPlan plan;
-  plan.handheld_views = a.handheld;
-  for (double d = -a.angle_max_deg; d <= a.angle_max_deg + 1e-9; d += a.angle_step_deg)
-    plan.platter_angles_rad.push_back(d * kDeg);
-  Progress progress("rendering calibration views");
-  progress.update(0, 1);
-  const auto shots = sim::render_calibration_shots(camera, plan);
-  progress.finish();
-  std::vector<CalibrationView> views;
-  for (const auto& s : shots) views.push_back({s.image, s.on_turntable, s.angle_rad, s.laser_on});
-  CalibrationOptions opt;
-  opt.pattern.corner_cols = plan.board.corner_cols;
-  opt.pattern.corner_rows = plan.board.corner_rows;
-  opt.pattern.square_mm = plan.board.square_mm;
-  opt.pattern.bottom_mm = plan.platter_bottom_mm;
-  const CalibrationReport rep = calibrate_scanner(views, camera.laser_count(), opt);
+int report_calibration(const CalibrationReport& rep, const std::string& out) {
   const Calibration& c = rep.calibration;
-  c.write_yaml(a.out);
+  c.write_yaml(out);
   std::printf("calibrated from %d views (%d not found): %d corners, %d laser points\n",
               rep.views_detected, rep.views_rejected, c.corners, c.laser_points);
   std::printf("  reprojection RMS %.4f px (OpenCV initial %.4f px), laser RMS %.4f mm\n",
@@ -79,8 +54,71 @@ int run_calibrate(const CalibrateArgs& a) {
                 c.lasers[k].distance_mm, c.uncertainty.laser_distance_mm[k]);
   std::printf("  axis direction +- %.4f deg, axis point +- %.4f mm\n",
               c.uncertainty.axis_direction_deg, c.uncertainty.axis_point_mm);
-  std::printf("wrote %s\n", a.out.c_str());
+  std::printf("wrote %s\n", out.c_str());
   return kSuccess;
+}
+
+// A recorded calibration session: every step is one view (its laser-off frame and one frame per
+// laser); the pattern and the board poses come from session.json.
+int run_calibrate_session(const CalibrateArgs& a) {
+  const SessionReader session(a.session);
+  const SessionHeader& h = session.manifest().header;
+  if (!h.calibration)
+    throw FileFormatError(std::filesystem::path(a.session) / "session.json",
+                          "not a calibration session (record one with scan --calibration)");
+  if (!session.complete())
+    std::cerr << "scanmesh: warning: " << a.session << " is incomplete (" << session.step_count()
+              << " of " << h.step_count << " steps); 'scan --calibration --resume' completes it\n";
+  const CalibrationSessionInfo& info = *h.calibration;
+  std::vector<CalibrationView> views;
+  Progress progress("reading views");
+  for (std::size_t i = 0; i < session.step_count(); ++i) {
+    ScanStep s = session.step(i);
+    const std::size_t pose = info.step(i).first;
+    views.push_back({std::move(s.laser_off), info.poses[pose].on_platter, s.angle_rad,
+                     std::move(s.laser_on), static_cast<int>(pose)});
+    progress.update(static_cast<int>(i + 1), static_cast<int>(session.step_count()));
+  }
+  progress.finish();
+  CalibrationOptions opt;
+  opt.pattern = {info.pattern.corner_cols, info.pattern.corner_rows, info.pattern.square_mm,
+                 info.pattern.bottom_mm};
+  return report_calibration(calibrate_scanner(views, h.laser_count, opt), a.out);
+}
+
+int run_calibrate(const CalibrateArgs& a) {
+  if (!a.session.empty() && a.sim)
+    throw InvalidInputError("calibrate: give a calibration SESSION folder or --sim, not both");
+  if (!a.session.empty()) return run_calibrate_session(a);
+  if (!a.sim)
+    throw InvalidInputError(
+        "calibrate: give a calibration SESSION folder (scan --calibration) or --sim");
+  if (!a.size.empty() && !a.rig.empty())
+    throw InvalidInputError("calibrate: give --rig or --size, not both");
+  const sim::RigConfig rig =
+      a.size.empty() ? load_rig(a.rig) : std::apply(scaled_ciclop_rig, parse_frame_size(a.size));
+  // The pattern mode renders only the board and the platter; the scene is unused.
+  const sim::Scene unused = sim::Scene::from_yaml_text(
+      "objects:\n  - {type: sphere, name: unused, center: [0, 0, -1000], radius: 1}\n", "unused");
+  sim::TurntableCamera camera(unused, rig);
+  sim::CalibrationPlan plan;
+  plan.handheld_views = a.handheld;
+  plan.placements = builtin_platter_placements(a.poses);
+  for (double d = -a.angle_max_deg; d <= a.angle_max_deg + 1e-9; d += a.angle_step_deg)
+    plan.platter_angles_rad.push_back(d * kDeg);
+  Progress progress("rendering calibration views");
+  progress.update(0, 1);
+  const auto shots = sim::render_calibration_shots(camera, plan);
+  progress.finish();
+  std::vector<CalibrationView> views;
+  for (const auto& s : shots)
+    views.push_back({s.image, s.on_turntable, s.angle_rad, s.laser_on, s.placement});
+  CalibrationOptions opt;
+  opt.pattern.corner_cols = plan.board.corner_cols;
+  opt.pattern.corner_rows = plan.board.corner_rows;
+  opt.pattern.square_mm = plan.board.square_mm;
+  opt.pattern.bottom_mm = plan.platter_bottom_mm;
+  return report_calibration(calibrate_scanner(views, camera.laser_count(), opt), a.out);
 }
 
 struct ReconstructCliArgs {
@@ -131,7 +169,10 @@ int run_reconstruct_from(const ScanStepSource& source, const ReconstructArgs& a)
 void register_vision_commands(CLI::App& app, CommandList& commands) {
   auto cal = std::make_shared<CalibrateArgs>();
   auto* cal_cmd = app.add_subcommand(
-      "calibrate", "Calibrate camera, lasers and turntable axis (simulated rig: --sim)");
+      "calibrate",
+      "Calibrate camera, lasers and turntable axis from a calibration session (or --sim)");
+  cal_cmd->add_option("session", cal->session,
+                      "Calibration session folder (scan --calibration --out SESSION)");
   cal_cmd->add_flag("--sim", cal->sim, "Render the calibration views with the simulated camera");
   cal_cmd->add_option("--rig", cal->rig, "Simulated rig YAML (default: built-in Ciclop-like)")
       ->check(CLI::ExistingFile);
@@ -140,6 +181,9 @@ void register_vision_commands(CLI::App& app, CommandList& commands) {
   cal_cmd->add_option("--handheld", cal->handheld, "Hand-held board views")
       ->capture_default_str()
       ->check(CLI::Range(0, 100));
+  cal_cmd->add_option("--poses", cal->poses, "--sim: board placements on the platter")
+      ->capture_default_str()
+      ->check(CLI::Range(1, kMaxPlatterPoses));
   cal_cmd->add_option("--angle-step", cal->angle_step_deg, "Platter views every this (deg)")
       ->capture_default_str()
       ->check(CLI::Range(1.0, 90.0));
@@ -185,6 +229,9 @@ void register_vision_commands(CLI::App& app, CommandList& commands) {
          if (!rec->session.empty()) {
            // Replay: the recorded steps go through the same pipeline with no device.
            const SessionReader session(rec->session);
+           if (session.manifest().header.calibration)
+             throw FileFormatError(std::filesystem::path(rec->session) / "session.json",
+                                   "is a calibration session: use 'scanmesh calibrate' on it");
            if (!session.complete())
              std::cerr << "scanmesh: warning: " << rec->session << " is incomplete ("
                        << session.step_count() << " steps); 'scan --resume' completes it\n";

@@ -692,20 +692,34 @@ std::vector<std::optional<Vector2d>> TurntableCamera::pattern_corner_truth(doubl
   return out;
 }
 
-std::vector<CalibrationShot> render_calibration_shots(TurntableCamera& camera,
-                                                      const CalibrationPlan& plan) {
-  const auto saved = camera.pattern();
-  const double ph = camera.rig().platform_height_mm;
-  std::vector<CalibrationShot> shots;
-  // The plan's board standing upright on the platter (same orientation as upright()).
-  ChessboardPattern up = plan.board;
-  up.pose = ChessboardPattern::upright(ph).pose;
-  up.pose.translation() =
-      Vector3d(plan.platter_offset_mm, -0.5 * (up.corner_cols - 1) * up.square_mm,
-               ph + plan.platter_bottom_mm + (up.corner_rows - 1) * up.square_mm);
+ChessboardPattern place_on_platter(const ChessboardPattern& board, double platform_height_mm,
+                                   double bottom_mm, const BoardPlacement& placement) {
+  ChessboardPattern p = board;
+  p.pose = ChessboardPattern::upright(platform_height_mm).pose;
+  p.pose.translation() =
+      Vector3d(placement.offset_mm, placement.shift_mm - 0.5 * (p.corner_cols - 1) * p.square_mm,
+               platform_height_mm + bottom_mm + (p.corner_rows - 1) * p.square_mm);
+  if (placement.tilt_rad != 0) {
+    // Lean back about the bottom edge (the line x = offset on the platter top, along y): the
+    // top moves away from the camera side (-x).
+    const Vector3d hinge(placement.offset_mm, 0.0, platform_height_mm);
+    Eigen::Isometry3d lean = Eigen::Isometry3d::Identity();
+    lean.linear() = Eigen::AngleAxisd(-placement.tilt_rad, Vector3d::UnitY()).toRotationMatrix();
+    lean.translation() = hinge - lean.linear() * hinge;
+    p.pose = lean * p.pose;
+  }
+  return p;
+}
+
+std::vector<ChessboardPattern> handheld_board_poses(const CalibrationPlan& plan,
+                                                    double platform_height_mm) {
+  const ChessboardPattern up =
+      place_on_platter(plan.board, platform_height_mm, plan.platter_bottom_mm,
+                       BoardPlacement{.offset_mm = plan.platter_offset_mm});
   // Hand-held: the board tilted about its centre by up to ~30 degrees, moved toward the camera.
   const Vector3d centre_board(0.5 * (up.corner_cols - 1) * up.square_mm,
                               0.5 * (up.corner_rows - 1) * up.square_mm, 0.0);
+  std::vector<ChessboardPattern> poses;
   for (int i = 0; i < plan.handheld_views; ++i) {
     // Spread over the image and over tilts up to ~35 degrees (golden-angle sequence).
     const double a = 2.399963 * i;
@@ -724,6 +738,17 @@ std::vector<CalibrationShot> render_calibration_shots(TurntableCamera& camera,
                               45.0 + 45.0 * std::sin(2.1 * a) * f);
     p.pose.linear() = up.pose.linear() * r;
     p.pose.translation() = moved - p.pose.linear() * centre_board;
+    poses.push_back(p);
+  }
+  return poses;
+}
+
+std::vector<CalibrationShot> render_calibration_shots(TurntableCamera& camera,
+                                                      const CalibrationPlan& plan) {
+  const auto saved = camera.pattern();
+  const double ph = camera.rig().platform_height_mm;
+  std::vector<CalibrationShot> shots;
+  for (const ChessboardPattern& p : handheld_board_poses(plan, ph)) {
     camera.set_pattern(p);
     CalibrationShot s;
     s.image = camera.render(0.0, 0u);
@@ -736,15 +761,23 @@ std::vector<CalibrationShot> render_calibration_shots(TurntableCamera& camera,
   std::vector<double> angles = plan.platter_angles_rad;
   if (angles.empty())
     for (int d = -70; d <= 70; d += 10) angles.push_back(d * kDeg);
-  camera.set_pattern(up);
-  for (double a : angles) {
-    CalibrationShot s;
-    s.on_turntable = true;
-    s.angle_rad = a;
-    s.image = camera.render(a, 0u);
-    for (int k = 0; k < camera.laser_count(); ++k) s.laser_on.push_back(camera.render(a, 1u << k));
-    s.pattern = up;
-    shots.push_back(std::move(s));
+  std::vector<BoardPlacement> placements = plan.placements;
+  if (placements.empty()) placements.push_back({.offset_mm = plan.platter_offset_mm});
+  for (std::size_t k = 0; k < placements.size(); ++k) {
+    const ChessboardPattern up =
+        place_on_platter(plan.board, ph, plan.platter_bottom_mm, placements[k]);
+    camera.set_pattern(up);
+    for (double a : angles) {
+      CalibrationShot s;
+      s.on_turntable = true;
+      s.angle_rad = a;
+      s.image = camera.render(a, 0u);
+      for (int l = 0; l < camera.laser_count(); ++l)
+        s.laser_on.push_back(camera.render(a, 1u << l));
+      s.pattern = up;
+      s.placement = static_cast<int>(k);
+      shots.push_back(std::move(s));
+    }
   }
   camera.set_pattern(saved);
   return shots;

@@ -159,5 +159,62 @@ TEST(SessionManifest, RejectsMalformedInput) {
   EXPECT_EQ(parse_session_manifest(header, "{\"step\":0,\"ang").steps.size(), 0u);
 }
 
+TEST(Session, CalibrationSessionRoundTripAndRewind) {
+  const fs::path dir = scratch("calibration");
+  SessionHeader h = small_header(5);
+  CalibrationSessionInfo info;
+  info.pattern = {9, 7, 20.0, 30.0};
+  info.poses.push_back({true, "upright", {-0.5, 0.0, 0.5}});
+  info.poses.push_back({false, "held", {0.0}});
+  info.poses.push_back({true, "leaning", {0.25}});
+  h.calibration = info;
+  const auto render = sim::synthetic_turntable_renderer(32, 24);
+  {
+    SessionWriter w = SessionWriter::create(dir, h);
+    for (std::size_t i = 0; i < 5; ++i)
+      w.append_step(w.header().step_angle(i), frames_for(i, render, w.header().step_angle(i)));
+    // A resumed capture of pose 1 (step 3) starts the pose over: steps 3 and 4 go.
+    w.rewind(3);
+    EXPECT_EQ(w.steps_done(), 3u);
+  }
+  EXPECT_FALSE(fs::exists(dir / "frames" / "000003_off.png"));
+  EXPECT_TRUE(fs::exists(dir / "frames" / "000002_off.png"));
+  SessionWriter w = SessionWriter::resume(dir);
+  EXPECT_EQ(w.steps_done(), 3u);
+  w.append_step(w.header().step_angle(3), frames_for(3, render, 0.0));
+  const SessionReader r(dir);
+  ASSERT_TRUE(r.manifest().header.calibration.has_value());
+  const CalibrationSessionInfo& c = *r.manifest().header.calibration;
+  EXPECT_EQ(c.pattern.corner_cols, 9);
+  EXPECT_EQ(c.pattern.corner_rows, 7);
+  EXPECT_EQ(c.pattern.square_mm, 20.0);
+  EXPECT_EQ(c.pattern.bottom_mm, 30.0);
+  ASSERT_EQ(c.poses.size(), 3u);
+  EXPECT_FALSE(c.poses[1].on_platter);
+  EXPECT_EQ(c.poses[2].description, "leaning");
+  EXPECT_EQ(c.step(4).first, 2u);
+  EXPECT_EQ(c.first_step(2), 4u);
+  EXPECT_DOUBLE_EQ(r.manifest().header.step_angle(4), 0.25);
+  EXPECT_DOUBLE_EQ(r.manifest().steps[1].angle_rad, 0.0);
+  EXPECT_EQ(r.step_count(), 4u);
+  // A scan session has no "kind" (as every session written before calibration sessions).
+  EXPECT_EQ(header_to_json(small_header()).find("\"kind\""), std::string::npos);
+  const std::string text = header_to_json(h);
+  auto bad = [&](const std::string& from, const std::string& to) {
+    std::string t = text;
+    const auto pos = t.find(from);
+    ASSERT_NE(pos, std::string::npos) << from;
+    t.replace(pos, from.size(), to);
+    EXPECT_THROW(parse_session_manifest(t, "", dir), FileFormatError) << to;
+  };
+  bad("\"kind\": \"calibration\"", "\"kind\": \"other\"");
+  bad("\"step_count\": 5", "\"step_count\": 6");
+  bad("\"placement\": \"handheld\"", "\"placement\": \"floor\"");
+  bad("\"corner_cols\": 9", "\"corner_cols\": 2");
+  bad("\"square_mm\": 20.0", "\"square_mm\": -1.0");
+  bad("\"type\": \"chessboard\"", "\"type\": \"charuco\"");
+  fs::remove_all(dir.parent_path());
+}
+
 }  // namespace
 }  // namespace scanmesh

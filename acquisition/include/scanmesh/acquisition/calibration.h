@@ -75,7 +75,9 @@ struct Calibration {
 };
 
 //! The printed chessboard: inner corners, square size, and (for views on the platter) the
-//! height of its lowest corner row above the platter top (Horus calls it the origin distance).
+//! distance on the board from its lowest corner row to the board's bottom edge, which rests on
+//! the platter (Horus calls it the origin distance; for an upright board it is the height of the
+//! lowest corner row above the platter top).
 struct PatternSpec {
   int corner_cols = 11, corner_rows = 6;
   double square_mm = 13.0;
@@ -84,12 +86,16 @@ struct PatternSpec {
 
 //! One view of the chessboard. Hand-held views constrain the intrinsics; views standing on the
 //! platter (on_turntable) at a known turntable angle also constrain the axis, and with their
-//! laser frames (laser_on[k]: only laser k on) the laser planes.
+//! laser frames (laser_on[k]: only laser k on) the laser planes. Platter views with the same
+//! `placement` show the board standing in one place on the platter (one board pose turned with
+//! the table); several placements at different distances from the axis observe the axis through
+//! independent board poses.
 struct CalibrationView {
   Image8 image;  //!< all lasers off
   bool on_turntable = false;
   double angle_rad = 0;
   std::vector<Image8> laser_on;
+  int placement = 0;
 };
 
 struct CalibrationOptions {

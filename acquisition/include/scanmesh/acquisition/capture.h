@@ -19,6 +19,9 @@ struct CaptureOptions {
   int discard_frames = 1;  //!< frames thrown away after a laser switched (exposure in flight)
   //! Wait function (tests and the simulator scale or skip real sleeping).
   std::function<void(double seconds)> sleep;
+  //! Called before each step's move with the step index (a calibration session asks the user to
+  //! place the board here when a new pose begins, or the simulation moves its board).
+  std::function<void(std::size_t step)> before_step;
   //! Called after each complete step with (steps done, steps total).
   std::function<void(std::size_t, std::size_t)> progress;
 };

@@ -24,6 +24,30 @@ namespace scanmesh {
 
 enum class FrameStorage { Png, Mjpeg };
 
+//! What a calibration session (`scanmesh scan --calibration`) records besides the frames: the
+//! printed pattern, so `scanmesh calibrate SESSION` needs no other input, and the board poses.
+//! Each pose is one placement of the board: standing on the platter (the table turns through the
+//! pose's angles, one step each) or held in front of the camera (the table stands still).
+struct CalibrationSessionInfo {
+  struct Pattern {
+    int corner_cols = 11, corner_rows = 6;  //!< inner corners
+    double square_mm = 13.0;
+    double bottom_mm = 25.0;  //!< lowest corner row to the board's bottom edge (along the board)
+  } pattern;
+  struct Pose {
+    bool on_platter = true;
+    std::string description;         //!< what the user was asked to do
+    std::vector<double> angles_rad;  //!< one step per angle
+  };
+  std::vector<Pose> poses;
+
+  std::size_t step_count() const;
+  //! The pose and the angle of step i (throws InvalidInputError past the end).
+  std::pair<std::size_t, double> step(std::size_t i) const;
+  //! First step of pose k.
+  std::size_t first_step(std::size_t pose) const;
+};
+
 //! session.json.
 struct SessionHeader {
   int version = 1;
@@ -37,8 +61,11 @@ struct SessionHeader {
   std::string board_device, board_dialect, board_firmware;
   bool simulated = false;
   std::string notes;  //!< free text (e.g. the simulation settings)
+  //! Set for a calibration session (session.json "kind": "calibration"); step_count is then the
+  //! sum of the poses' angles.
+  std::optional<CalibrationSessionInfo> calibration;
 
-  //! Angle of step i: start + i * 2 pi / step_count.
+  //! Angle of step i: start + i * 2 pi / step_count; a calibration session's plan angle.
   double step_angle(std::size_t i) const;
 };
 
@@ -89,6 +116,11 @@ class SessionWriter {
   const SessionHeader& header() const { return header_; }
   std::size_t steps_done() const { return steps_done_; }
   bool complete() const { return steps_done_ >= header_.step_count; }
+
+  //! Drops every step from `steps` on (the journal is rewritten atomically, their frames
+  //! deleted): a calibration resume restarts the interrupted board pose, because the board may
+  //! have moved. Throws IoError.
+  void rewind(std::size_t steps);
 
   //! Writes the frames of the next step and appends its record (fsync'd). `frames[0]` is the
   //! laser-off frame, `frames[1 + k]` laser k. Throws IoError.

@@ -175,14 +175,33 @@ class TurntableCamera {
   mutable std::shared_ptr<const HitBuffer> cache_;
 };
 
+//! Where the board stands on the platter in one placement of a calibration session: upright
+//! (or leaning back by `tilt_rad` about its bottom edge, which rests on the platter), its printed
+//! side toward the camera at turntable angle 0, its bottom edge `offset_mm` off the axis toward
+//! the camera (negative: behind the axis) and shifted `shift_mm` sideways along the board.
+struct BoardPlacement {
+  double offset_mm = 30.0;
+  double shift_mm = 0.0;
+  double tilt_rad = 0.0;
+};
+
+//! `board` (size, squares) standing on the platter as `placement` says, its lowest corner row
+//! `bottom_mm` above the bottom edge (along the board).
+ChessboardPattern place_on_platter(const ChessboardPattern& board, double platform_height_mm,
+                                   double bottom_mm, const BoardPlacement& placement);
+
 //! A calibration session for the simulated rig: hand-held board poses (tilted views in front of
-//! the camera, for the intrinsics) and the board standing upright on the platter, off the axis,
-//! at several turntable angles with each laser's frame (for the laser planes and the axis).
+//! the camera, for the intrinsics) and the board standing on the platter in one or more
+//! placements, each at several turntable angles with each laser's frame (for the laser planes
+//! and the axis).
 struct CalibrationPlan {
   ChessboardPattern board;          //!< size, squares, albedo; the pose is set per shot
-  double platter_bottom_mm = 25.0;  //!< lowest corner row above the platter top
+  double platter_bottom_mm = 25.0;  //!< lowest corner row above the board's bottom edge
   double platter_offset_mm = 30.0;  //!< board plane this far off the axis (toward the camera)
-  std::vector<double> platter_angles_rad;  //!< empty: -70..70 degrees every 10 degrees (tests and CLI use 5)
+  //! Empty: one upright placement `platter_offset_mm` off the axis.
+  std::vector<BoardPlacement> placements;
+  std::vector<double>
+      platter_angles_rad;  //!< empty: -70..70 degrees every 10 degrees (tests and CLI use 5)
   int handheld_views = 16;
   bool handheld_lasers = true;  //!< also render each laser's frame of the hand-held views
 };
@@ -192,7 +211,11 @@ struct CalibrationShot {
   double angle_rad = 0;
   std::vector<Image8> laser_on;  //!< laser k alone (platter shots; hand-held if asked)
   ChessboardPattern pattern;     //!< the exact board pose of the shot (object frame)
+  int placement = 0;             //!< index into the plan's placements (platter shots)
 };
+//! The board poses of the plan's hand-held views (object frame, seen at turntable angle 0).
+std::vector<ChessboardPattern> handheld_board_poses(const CalibrationPlan& plan,
+                                                    double platform_height_mm);
 //! Renders the plan's shots (restores the camera's pattern mode afterwards). Deterministic.
 std::vector<CalibrationShot> render_calibration_shots(TurntableCamera& camera,
                                                       const CalibrationPlan& plan = {});
