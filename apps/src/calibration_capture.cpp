@@ -11,6 +11,7 @@
 
 #include "scanmesh/core/errors.h"
 #include "scanmesh/sim/scene.h"
+#include "sim_rig.h"
 
 namespace scanmesh::cli {
 namespace {
@@ -72,19 +73,6 @@ std::vector<sim::BoardPlacement> builtin_platter_placements(int n) {
   std::vector<sim::BoardPlacement> p;
   for (int k = 0; k < n && k < kMaxPlatterPoses; ++k) p.push_back(kPlatterPoses[k].placement);
   return p;
-}
-
-sim::RigConfig scaled_ciclop_rig(int width, int height) {
-  sim::RigConfig rig = sim::builtin_ciclop_rig();
-  const double sx = static_cast<double>(width) / rig.width;
-  const double sy = static_cast<double>(height) / rig.height;
-  rig.intrinsics.fx *= sx;
-  rig.intrinsics.cx = (rig.intrinsics.cx + 0.5) * sx - 0.5;
-  rig.intrinsics.fy *= sy;
-  rig.intrinsics.cy = (rig.intrinsics.cy + 0.5) * sy - 0.5;
-  rig.width = width;
-  rig.height = height;
-  return rig;
 }
 
 SimCalibrationBoard::SimCalibrationBoard(const CalibrationSessionInfo& info, int width, int height)

@@ -27,9 +27,6 @@ CalibrationSessionInfo make_calibration_plan(const CalibrationPlanArgs& args);
 //! The first n platter placements of the plan (the simulated board of `calibrate --sim` too).
 std::vector<sim::BoardPlacement> builtin_platter_placements(int n);
 
-//! The built-in rig of the simulation at a frame size (intrinsics scale with the sensor).
-sim::RigConfig scaled_ciclop_rig(int width, int height);
-
 //! The simulated world of a calibration session: a TurntableCamera in pattern mode whose board
 //! stands where pose k of `info` puts it after set_pose(k).
 class SimCalibrationBoard {
