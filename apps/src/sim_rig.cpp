@@ -56,15 +56,7 @@ sim::FrameRenderer make_sim_renderer(const std::string& scene, int width, int he
   auto world = std::make_shared<sim::Scene>(scene == "head" ? sim::builtin_head_scene()
                                                             : sim::Scene::from_yaml_file(scene));
   // The built-in Ciclop rig at the requested frame size: intrinsics scale with the sensor.
-  sim::RigConfig rig = sim::builtin_ciclop_rig();
-  const double sx = static_cast<double>(width) / rig.width;
-  const double sy = static_cast<double>(height) / rig.height;
-  rig.intrinsics.fx *= sx;
-  rig.intrinsics.cx = (rig.intrinsics.cx + 0.5) * sx - 0.5;
-  rig.intrinsics.fy *= sy;
-  rig.intrinsics.cy = (rig.intrinsics.cy + 0.5) * sy - 0.5;
-  rig.width = width;
-  rig.height = height;
+  const sim::RigConfig rig = sim::rig_at_size(sim::builtin_ciclop_rig(), width, height);
   auto camera = std::make_shared<sim::TurntableCamera>(*world, rig);
   // The closure owns the scene and the camera (which keeps a reference to the scene).
   return [world, camera](double angle_rad, unsigned laser_mask) {
