@@ -343,8 +343,8 @@ std::uint32_t ftdi_baud_divisor(int baud) {
 
 std::optional<std::string> known_board_kind(std::uint16_t vid, std::uint16_t pid,
                                             std::uint8_t device_class, bool has_cdc_interface) {
-  if (vid == 0x1a86 && pid == 0x7523) return "CH340";
-  if (vid == 0x0403 && pid == 0x6001) return "FTDI";
+  if (usb_bridge_of(vid, pid) == UsbBridge::Ch34x) return "CH340";
+  if (usb_bridge_of(vid, pid) == UsbBridge::Ftdi) return "FTDI";
   if (vid == 0x2341 || vid == 0x2a03) return "Arduino";
   if (device_class == kClassCdcComm || has_cdc_interface) return "CDC-ACM";
   return std::nullopt;
