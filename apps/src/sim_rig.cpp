@@ -60,16 +60,7 @@ std::pair<int, int> parse_frame_size(const std::string& s) {
 }
 
 sim::RigConfig scaled_ciclop_rig(int width, int height) {
-  sim::RigConfig rig = sim::builtin_ciclop_rig();
-  const double sx = static_cast<double>(width) / rig.width;
-  const double sy = static_cast<double>(height) / rig.height;
-  rig.intrinsics.fx *= sx;
-  rig.intrinsics.cx = (rig.intrinsics.cx + 0.5) * sx - 0.5;
-  rig.intrinsics.fy *= sy;
-  rig.intrinsics.cy = (rig.intrinsics.cy + 0.5) * sy - 0.5;
-  rig.width = width;
-  rig.height = height;
-  return rig;
+  return sim::rig_at_size(sim::builtin_ciclop_rig(), width, height);
 }
 
 sim::FrameRenderer make_sim_renderer(const std::string& scene, int width, int height) {

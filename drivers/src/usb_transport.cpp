@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 
 #include "scanmesh/core/errors.h"
@@ -19,6 +20,22 @@ constexpr std::uint8_t kSetLineCoding = 0x20;
 constexpr std::uint8_t kSetControlLineState = 0x22;
 // bmRequestType: host-to-device, class request, interface recipient.
 constexpr std::uint8_t kClassInterfaceOut = 0x21;
+
+// Vendor requests of the USB-serial bridges (bmRequestType: vendor, device recipient).
+constexpr std::uint8_t kVendorOut = 0x40, kVendorIn = 0xc0;
+// WCH CH340/CH341: registers written in pairs with WRITE_REG (wValue = reg2 << 8 | reg1,
+// wIndex = val2 << 8 | val1); the baud rate is the prescaler (0x12) / divisor (0x13) pair, the
+// line control the 0x18 / 0x25 pair; modem lines are set active low with MODEM_CTRL.
+constexpr std::uint8_t kCh34xReadVersion = 0x5f, kCh34xSerialInit = 0xa1, kCh34xWriteReg = 0x9a,
+                       kCh34xModemCtrl = 0xa4;
+constexpr std::uint16_t kCh34xRegBaud = 0x1312, kCh34xRegLcr = 0x2518;
+constexpr std::uint8_t kCh34xLcrEnableRxTx8 = 0xc3;  // RX on, TX on, 8 data bits
+constexpr std::uint8_t kCh34xDtr = 0x20, kCh34xRts = 0x40;
+// FTDI FT232 (BM/R/X/H single port): SIO requests on interface A.
+constexpr std::uint8_t kFtdiReset = 0x00, kFtdiModemCtrl = 0x01, kFtdiSetBaud = 0x03,
+                       kFtdiSetData = 0x04;
+constexpr std::uint16_t kFtdiDtrRtsOn = 0x0303;  // both lines high, both masks set
+constexpr int kFtdiStatusBytes = 2;  // every bulk IN packet starts with modem + line status
 
 std::string hex4(unsigned v) {
   char b[8];
@@ -99,8 +116,9 @@ bool has_cdc_comm(libusb_device* dev) {
 
 class UsbTransport final : public Transport {
  public:
-  UsbTransport(libusb_context* ctx, libusb_device_handle* handle, std::string name, Endpoints ep)
-      : ctx_(ctx), handle_(handle), name_(std::move(name)), ep_(ep) {}
+  UsbTransport(libusb_context* ctx, libusb_device_handle* handle, std::string name, Endpoints ep,
+               UsbBridge bridge)
+      : ctx_(ctx), handle_(handle), name_(std::move(name)), ep_(ep), bridge_(bridge) {}
   ~UsbTransport() override { close(); }
 
   void claim(int baud) {
@@ -122,6 +140,8 @@ class UsbTransport final : public Transport {
                           "cannot claim interface " + std::to_string(itf) + ": " + problem_text(r));
       claimed_.push_back(itf);
     }
+    if (bridge_ == UsbBridge::Ch34x) return setup_ch34x(baud);
+    if (bridge_ == UsbBridge::Ftdi) return setup_ftdi(baud);
     if (ep_.comm_interface >= 0) {
       // 8N1 at `baud`: dwDTERate (LE), bCharFormat 0 (1 stop bit), bParityType 0, bDataBits 8.
       unsigned char coding[7] = {static_cast<unsigned char>(baud & 0xff),
@@ -141,6 +161,51 @@ class UsbTransport final : public Transport {
                                   nullptr, 0, 1000);
       if (r != 0) throw DeviceError(name_, "SET_CONTROL_LINE_STATE failed: " + problem_text(r));
     }
+  }
+
+  // One vendor control request; throws naming the request on any failure.
+  void vendor_out(std::uint8_t request, std::uint16_t value, std::uint16_t index,
+                  const char* what) {
+    const int r =
+        libusb_control_transfer(handle_, kVendorOut, request, value, index, nullptr, 0, 1000);
+    if (r != 0) throw DeviceError(name_, std::string(what) + " failed: " + problem_text(r));
+  }
+
+  void setup_ch34x(int baud) {
+    unsigned char version[2] = {0, 0};
+    const int r = libusb_control_transfer(handle_, kVendorIn, kCh34xReadVersion, 0, 0, version,
+                                          sizeof version, 1000);
+    if (r != static_cast<int>(sizeof version))
+      throw DeviceError(name_, "CH34x READ_VERSION failed: " + problem_text(r < 0 ? r : -99));
+    vendor_out(kCh34xSerialInit, 0, 0, "CH34x SERIAL_INIT");
+    // Bit 7 of the prescaler byte: send what arrived at once instead of waiting for a full
+    // 32-byte packet (chips newer than version 0x27).
+    std::uint16_t reg = ch34x_baud_register(baud);
+    if (version[0] > 0x27) reg |= 0x80;
+    vendor_out(kCh34xWriteReg, kCh34xRegBaud, reg, "CH34x baud rate");
+    vendor_out(kCh34xWriteReg, kCh34xRegLcr, kCh34xLcrEnableRxTx8, "CH34x line control");
+    // Active low: the bits of the lines to raise are cleared.
+    vendor_out(kCh34xModemCtrl, static_cast<std::uint16_t>(~(kCh34xDtr | kCh34xRts) & 0xff), 0,
+               "CH34x MODEM_CTRL");
+  }
+
+  void setup_ftdi(int baud) {
+    vendor_out(kFtdiReset, 0, 0, "FTDI RESET");
+    const std::uint32_t divisor = ftdi_baud_divisor(baud);
+    vendor_out(kFtdiSetBaud, static_cast<std::uint16_t>(divisor & 0xffff),
+               static_cast<std::uint16_t>(divisor >> 16), "FTDI SET_BAUD_RATE");
+    vendor_out(kFtdiSetData, 8, 0, "FTDI SET_DATA (8N1)");
+    vendor_out(kFtdiModemCtrl, kFtdiDtrRtsOn, 0, "FTDI MODEM_CTRL");
+  }
+
+  // FTDI: drops the two status bytes that open every max-packet-size chunk of an IN transfer.
+  std::size_t strip_ftdi_status(unsigned char* data, int transferred) const {
+    std::size_t out = 0;
+    for (int at = 0; at < transferred; at += ep_.in_packet) {
+      const int end = std::min(transferred, at + ep_.in_packet);
+      for (int i = at + kFtdiStatusBytes; i < end; ++i) data[out++] = data[i];
+    }
+    return out;
   }
 
   void write(std::string_view bytes) override {
@@ -179,9 +244,10 @@ class UsbTransport final : public Transport {
       const int r = libusb_bulk_transfer(
           handle_, ep_.in, buffer.data(), static_cast<int>(buffer.size()), &transferred,
           static_cast<unsigned>(std::max<long long>(left.count(), 1)));
-      if (transferred > 0)
-        lines_.append(std::string_view(reinterpret_cast<const char*>(buffer.data()),
-                                       static_cast<std::size_t>(transferred)));
+      std::size_t got = static_cast<std::size_t>(std::max(transferred, 0));
+      if (bridge_ == UsbBridge::Ftdi) got = strip_ftdi_status(buffer.data(), transferred);
+      if (got > 0)
+        lines_.append(std::string_view(reinterpret_cast<const char*>(buffer.data()), got));
       if (r == 0 || r == LIBUSB_ERROR_OVERFLOW) continue;
       if (r == LIBUSB_ERROR_TIMEOUT) {
         if (auto line = lines_.pop_line()) return line;
@@ -219,6 +285,7 @@ class UsbTransport final : public Transport {
   libusb_device_handle* handle_;
   std::string name_;
   Endpoints ep_;
+  UsbBridge bridge_;
   std::vector<int> claimed_, detached_;
   LineBuffer lines_;
 };
@@ -235,10 +302,49 @@ bool matches(const UsbSerialOptions& o, libusb_device* dev, const libusb_device_
 
 }  // namespace
 
+UsbBridge usb_bridge_of(std::uint16_t vid, std::uint16_t pid) {
+  if (vid == 0x1a86 && (pid == 0x7523 || pid == 0x7522 || pid == 0x5523)) return UsbBridge::Ch34x;
+  if (vid == 0x0403 && (pid == 0x6001 || pid == 0x6014 || pid == 0x6015)) return UsbBridge::Ftdi;
+  return UsbBridge::CdcAcm;
+}
+
+std::uint16_t ch34x_baud_register(int baud) {
+  if (baud < 50 || baud > 2000000)
+    throw InvalidInputError("baud rate " + std::to_string(baud) +
+                            " is outside what a CH34x can do (50..2000000)");
+  // rate = 48 MHz / (2^(12 - 3 ps - fact) * div), ps 0..3, fact 0..1, div 2..255: the closest.
+  long best_error = -1;
+  std::uint16_t best = 0;
+  for (int ps = 0; ps <= 3; ++ps)
+    for (int fact = 0; fact <= 1; ++fact) {
+      const long clock = 48000000L >> (12 - 3 * ps - fact);
+      for (long div = 2; div <= 255; ++div) {
+        const long error = std::labs(clock / div - baud);
+        if (best_error >= 0 && error >= best_error) continue;
+        best_error = error;
+        best = static_cast<std::uint16_t>(((0x100 - div) << 8) | (fact << 2) | ps);
+      }
+    }
+  return best;
+}
+
+std::uint32_t ftdi_baud_divisor(int baud) {
+  if (baud < 183 || baud > 3000000)
+    throw InvalidInputError("baud rate " + std::to_string(baud) +
+                            " is outside what an FT232 can do (183..3000000)");
+  // 3 MHz / (n + f/8): n in the low 14 bits, the eighths f coded in 3 bits (14, 15 and 16).
+  static constexpr std::uint32_t kEighthsCode[8] = {0, 3, 2, 4, 1, 5, 6, 7};
+  const long eighths = (24000000L + baud / 2) / baud;
+  const std::uint32_t whole = static_cast<std::uint32_t>(eighths >> 3);
+  if (whole == 1 && (eighths & 7) == 0) return 0;  // 3 Mbaud is coded 0
+  if (whole == 1 && (eighths & 7) == 4) return 1;  // 2 Mbaud is coded 1
+  return whole | (kEighthsCode[eighths & 7] << 14);
+}
+
 std::optional<std::string> known_board_kind(std::uint16_t vid, std::uint16_t pid,
                                             std::uint8_t device_class, bool has_cdc_interface) {
-  if (vid == 0x1a86 && pid == 0x7523) return "CH340";
-  if (vid == 0x0403 && pid == 0x6001) return "FTDI";
+  if (usb_bridge_of(vid, pid) == UsbBridge::Ch34x) return "CH340";
+  if (usb_bridge_of(vid, pid) == UsbBridge::Ftdi) return "FTDI";
   if (vid == 0x2341 || vid == 0x2a03) return "Arduino";
   if (device_class == kClassCdcComm || has_cdc_interface) return "CDC-ACM";
   return std::nullopt;
@@ -333,7 +439,8 @@ std::unique_ptr<Transport> open_usb_transport(const UsbSerialOptions& options) {
     libusb_exit(ctx);
     throw DeviceError(name, "cannot open: " + problem_text(r));
   }
-  auto transport = std::make_unique<UsbTransport>(ctx, handle, name, ep);
+  auto transport = std::make_unique<UsbTransport>(ctx, handle, name, ep,
+                                                  usb_bridge_of(desc.idVendor, desc.idProduct));
   transport->claim(options.baud);
   return transport;
 }

@@ -272,6 +272,19 @@ RigConfig builtin_ciclop_rig() {
   return c;
 }
 
+RigConfig rig_at_size(RigConfig rig, int width, int height) {
+  const double sx = static_cast<double>(width) / rig.width;
+  const double sy = static_cast<double>(height) / rig.height;
+  rig.intrinsics.fx *= sx;
+  rig.intrinsics.cx = (rig.intrinsics.cx + 0.5) * sx - 0.5;
+  rig.intrinsics.fy *= sy;
+  rig.intrinsics.cy = (rig.intrinsics.cy + 0.5) * sy - 0.5;
+  rig.width = width;
+  rig.height = height;
+  rig.validate();
+  return rig;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Pattern
 

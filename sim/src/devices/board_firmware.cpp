@@ -155,6 +155,7 @@ void SimBoardFirmware::execute(const std::string& raw, Clock::time_point now) {
     const long long physical = initial_steps_ + to_steps_;
     to_steps_ = from_steps_ = std::llround(*x * options_.steps_per_revolution / 360.0);
     initial_steps_ = physical - to_steps_;
+    ++position_declarations_;
     respond("ok");
     return;
   }
@@ -240,6 +241,11 @@ bool SimBoardFirmware::stalled() const {
   std::lock_guard lock(mutex_);
   return stalled_;
 }
+int SimBoardFirmware::position_declarations() const {
+  std::lock_guard lock(mutex_);
+  return position_declarations_;
+}
+
 int SimBoardFirmware::commands_received() const {
   std::lock_guard lock(mutex_);
   return commands_;

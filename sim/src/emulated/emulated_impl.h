@@ -3,6 +3,7 @@
 
 #include <umockdev.h>
 
+#include <chrono>
 #include <deque>
 #include <list>
 #include <mutex>
@@ -12,8 +13,14 @@
 
 namespace scanmesh::sim {
 
+enum class EmulatedBridge { CdcAcm, Ch34x, Ftdi };
+
 struct UsbBoardEmulation {
   std::shared_ptr<SimBoardFirmware> firmware;
+  EmulatedBridge bridge = EmulatedBridge::CdcAcm;
+  unsigned char ep_in = 0x83, ep_out = 0x04;
+  int in_packet = 64;
+  std::chrono::steady_clock::time_point last_in_packet{};
   UMockdevIoctlBase* handler = nullptr;
   std::mutex mutex;
   EmulatedUsbBoardState state;

@@ -5,8 +5,10 @@
 #include <linux/usbdevice_fs.h>
 #include <sys/ioctl.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <cstddef>
 #include <cstdio>
 #include <cstdlib>
@@ -19,7 +21,90 @@
 namespace scanmesh::sim {
 namespace {
 
-constexpr unsigned char kEpOut = 0x04, kEpIn = 0x83;
+// The firmware's UART rate (Serial.begin(115200) on the Horus firmware) and the mismatch beyond
+// which a UART receiver no longer frames bytes correctly.
+constexpr double kFirmwareBaud = 115200, kBaudTolerance = 0.03;
+
+const char* kernel_driver_of(EmulatedBridge b) {
+  return b == EmulatedBridge::Ch34x ? "ch341" : b == EmulatedBridge::Ftdi ? "ftdi_sio" : "cdc_acm";
+}
+
+// Bytes across a UART whose two ends disagree on the rate: framing errors, wrong bits.
+bool line_garbled(const UsbBoardEmulation& b) {
+  if (b.bridge == EmulatedBridge::CdcAcm) return false;  // the line is the board's own USB
+  return std::abs(b.state.line_coding_baud - kFirmwareBaud) > kBaudTolerance * kFirmwareBaud;
+}
+std::string garble(std::string bytes) {
+  for (char& c : bytes) c = static_cast<char>(static_cast<unsigned char>(c) ^ 0xa5u);
+  return bytes;
+}
+
+// The rate a CH34x runs at for a baud register value (inverse of the chip's divisor formula:
+// 48 MHz / (2^(12 - 3 ps - fact) * div)), 0 for an invalid value.
+double ch34x_rate(unsigned reg) {
+  const unsigned ps = reg & 3, fact = (reg >> 2) & 1, div = 0x100 - ((reg >> 8) & 0xff);
+  if (div < 2 || div > 255) return 0;
+  return 48e6 / (static_cast<double>(1u << (12 - 3 * ps - fact)) * div);
+}
+
+// The rate an FT232R runs at for a SET_BAUD_RATE divisor: 3 MHz / (whole + eighths / 8).
+double ftdi_rate(unsigned value, unsigned index) {
+  const unsigned whole = value & 0x3fff;
+  const unsigned code = ((value >> 14) & 3) | ((index & 1) << 2);
+  static constexpr double kEighths[8] = {0, 4, 2, 1, 3, 5, 6, 7};  // code -> eighths
+  if (whole == 0 && code == 0) return 3e6;
+  if (whole == 1 && code == 0) return 2e6;
+  const double d = whole + kEighths[code] / 8.0;
+  return d < 2 ? 0 : 3e6 / d;
+}
+
+// A vendor control request to a CH34x or FTDI bridge. Returns false for a request the chip
+// would stall. `data` is the data stage (IN: to be filled).
+bool bridge_request(UsbBoardEmulation& b, std::uint8_t type, std::uint8_t req, unsigned value,
+                    unsigned index, unsigned char* data, unsigned length) {
+  if (b.bridge == EmulatedBridge::Ch34x) {
+    if (type == 0xc0 && req == 0x5f && length >= 2) {  // READ_VERSION
+      data[0] = 0x31;
+      data[1] = 0x00;
+      return true;
+    }
+    if (type != 0x40) return false;
+    if (req == 0xa1) return true;  // SERIAL_INIT
+    if (req == 0x9a && value == 0x1312) {
+      b.state.line_coding_baud = ch34x_rate(index & 0xff7f);
+      return b.state.line_coding_baud > 0;
+    }
+    if (req == 0x9a && value == 0x2518) {
+      b.state.data_bits = (index & 0xc0) == 0xc0 ? 5 + static_cast<int>(index & 3) : 0;
+      return true;
+    }
+    if (req == 0xa4) {  // MODEM_CTRL, lines active low
+      b.state.dtr = (value & 0x20) == 0;
+      return true;
+    }
+    return false;
+  }
+  if (b.bridge == EmulatedBridge::Ftdi) {
+    if (type != 0x40) return false;
+    switch (req) {
+      case 0x00:  // RESET
+        b.unread.clear();
+        return true;
+      case 0x01:  // MODEM_CTRL: bit 8 masks DTR (bit 0)
+        if (value & 0x100) b.state.dtr = value & 1;
+        return true;
+      case 0x03:  // SET_BAUD_RATE
+        b.state.line_coding_baud = ftdi_rate(value, index);
+        return b.state.line_coding_baud > 0;
+      case 0x04:  // SET_DATA: bits 0-7 data bits
+        b.state.data_bits = static_cast<int>(value & 0xff);
+        return true;
+      default:
+        return false;
+    }
+  }
+  return false;
+}
 
 void complete(UMockdevIoctlClient* client, long result, int err) {
   umockdev_ioctl_client_complete(client, result, err);
@@ -61,7 +146,7 @@ gboolean handle_usb_ioctl(UMockdevIoctlBase*, UMockdevIoctlClient* client, gpoin
         umockdev_ioctl_data_unref(d);
         complete(client, -1, ENODATA);
       } else {
-        std::snprintf(g->driver, sizeof g->driver, "cdc_acm");
+        std::snprintf(g->driver, sizeof g->driver, "%s", kernel_driver_of(board->bridge));
         umockdev_ioctl_data_unref(d);
         complete(client, 0, 0);
       }
@@ -109,8 +194,20 @@ gboolean handle_usb_ioctl(UMockdevIoctlBase*, UMockdevIoctlClient* client, gpoin
       if (urb->type == USBDEVFS_URB_TYPE_CONTROL && urb->buffer_length >= 8) {
         const std::uint8_t request_type = bytes[0], req = bytes[1];
         const unsigned value = bytes[2] | (bytes[3] << 8);
+        const unsigned index = bytes[4] | (bytes[5] << 8);
         const unsigned length = bytes[6] | (bytes[7] << 8);
-        if (request_type == 0x21 && req == 0x20 && length >= 7) {  // SET_LINE_CODING
+        if (board->bridge != EmulatedBridge::CdcAcm) {
+          if (!bridge_request(*board, request_type, req, value, index, buffer->data + 8,
+                              std::min<unsigned>(length, urb->buffer_length - 8))) {
+            urb->status = -EPIPE;
+            urb->actual_length = 0;
+            umockdev_ioctl_data_unref(buffer);
+            board->done.push_back(urb_data);
+            complete(client, 0, 0);
+            return TRUE;
+          }
+          ++board->state.vendor_requests;
+        } else if (request_type == 0x21 && req == 0x20 && length >= 7) {  // SET_LINE_CODING
           board->state.line_coding_baud =
               bytes[8] | (bytes[9] << 8) | (bytes[10] << 16) | (bytes[11] << 24);
           board->state.data_bits = bytes[14];
@@ -126,13 +223,14 @@ gboolean handle_usb_ioctl(UMockdevIoctlBase*, UMockdevIoctlClient* client, gpoin
         urb->actual_length = static_cast<int>(length);
         umockdev_ioctl_data_unref(buffer);
         board->done.push_back(urb_data);
-      } else if (urb->type == USBDEVFS_URB_TYPE_BULK && urb->endpoint == kEpOut) {
-        board->firmware->receive(std::string_view(reinterpret_cast<const char*>(bytes),
-                                                  static_cast<std::size_t>(urb->buffer_length)));
+      } else if (urb->type == USBDEVFS_URB_TYPE_BULK && urb->endpoint == board->ep_out) {
+        std::string sent(reinterpret_cast<const char*>(bytes),
+                         static_cast<std::size_t>(urb->buffer_length));
+        board->firmware->receive(line_garbled(*board) ? garble(sent) : sent);
         urb->actual_length = urb->buffer_length;
         umockdev_ioctl_data_unref(buffer);
         board->done.push_back(urb_data);
-      } else if (urb->type == USBDEVFS_URB_TYPE_BULK && urb->endpoint == kEpIn) {
+      } else if (urb->type == USBDEVFS_URB_TYPE_BULK && urb->endpoint == board->ep_in) {
         umockdev_ioctl_data_unref(buffer);
         board->in_flight.push_back(urb_data);
       } else {
@@ -178,13 +276,37 @@ gboolean handle_usb_ioctl(UMockdevIoctlBase*, UMockdevIoctlClient* client, gpoin
           hand_over(client, arg, urb_data);
           return TRUE;
         }
-        board->unread += board->firmware->transmit();
-        if (!board->unread.empty()) {
-          const std::size_t n = std::min<std::size_t>(board->unread.size(),
-                                                      static_cast<std::size_t>(urb->buffer_length));
+        const std::string fresh = board->firmware->transmit();
+        board->unread += line_garbled(*board) ? garble(fresh) : fresh;
+        const auto now = std::chrono::steady_clock::now();
+        // An FT232R sends a status-only packet every latency period (16 ms) when idle.
+        const bool ftdi = board->bridge == EmulatedBridge::Ftdi;
+        const bool ftdi_idle_packet =
+            ftdi && now - board->last_in_packet > std::chrono::milliseconds(16);
+        if (!board->unread.empty() || ftdi_idle_packet) {
           // urb->buffer points at the local copy of the client buffer resolved at submit time.
-          std::memcpy(urb->buffer, board->unread.data(), n);
-          board->unread.erase(0, n);
+          auto* out = static_cast<unsigned char*>(urb->buffer);
+          const auto room = static_cast<std::size_t>(urb->buffer_length);
+          std::size_t n = 0;
+          if (ftdi) {
+            // Packets of in_packet bytes, each headed by modem status (CTS|DSR) and line status
+            // (transmitter empty); a short packet ends the transfer.
+            const std::size_t payload = static_cast<std::size_t>(board->in_packet) - 2;
+            while (n + 2 <= room) {
+              const std::size_t k = std::min({payload, board->unread.size(), room - n - 2});
+              out[n] = 0x31;
+              out[n + 1] = 0x60;
+              std::memcpy(out + n + 2, board->unread.data(), k);
+              board->unread.erase(0, k);
+              n += 2 + k;
+              if (k < payload) break;
+            }
+          } else {
+            n = std::min(board->unread.size(), room);
+            std::memcpy(out, board->unread.data(), n);
+            board->unread.erase(0, n);
+          }
+          board->last_in_packet = now;
           urb->actual_length = static_cast<int>(n);
           urb->status = 0;
           board->in_flight.pop_front();
@@ -203,9 +325,30 @@ gboolean handle_usb_ioctl(UMockdevIoctlBase*, UMockdevIoctlClient* client, gpoin
   }
 }
 
-// Device descriptor + configuration of a minimal CDC-ACM device (USB 2.0, class 2).
-std::string descriptors_hex(std::uint16_t vid, std::uint16_t pid) {
+// Device descriptor + configuration: a minimal CDC-ACM device (USB 2.0, class 2), a CH340
+// (vendor class, one interface, 32-byte bulk endpoints) or an FT232R (vendor interface, 64-byte
+// bulk endpoints).
+std::string descriptors_hex(EmulatedBridge bridge, std::uint16_t vid, std::uint16_t pid) {
   char device[64];
+  if (bridge == EmulatedBridge::Ch34x) {
+    std::snprintf(device, sizeof device, "12011001ff000008%02x%02x%02x%02x640200020001", vid & 0xff,
+                  vid >> 8, pid & 0xff, pid >> 8);
+    return std::string(device) +
+           "090227000101008031"  // configuration: 39 bytes, 1 interface
+           "0904000003ff010200"  // interface 0: vendor class, 3 endpoints
+           "07058202200000"      // EP 0x82 bulk IN, 32 bytes
+           "07050202200000"      // EP 0x02 bulk OUT, 32 bytes
+           "07058103080001";     // EP 0x81 interrupt IN, 8 bytes
+  }
+  if (bridge == EmulatedBridge::Ftdi) {
+    std::snprintf(device, sizeof device, "1201000200000008%02x%02x%02x%02x000601020301", vid & 0xff,
+                  vid >> 8, pid & 0xff, pid >> 8);
+    return std::string(device) +
+           "09022000010100a02d"  // configuration: 32 bytes, 1 interface
+           "0904000002ffffff02"  // interface 0: vendor class, 2 endpoints
+           "07058102400000"      // EP 0x81 bulk IN, 64 bytes
+           "07050202400000";     // EP 0x02 bulk OUT, 64 bytes
+  }
   std::snprintf(device, sizeof device, "1201000202000040%02x%02x%02x%02x000101020301", vid & 0xff,
                 vid >> 8, pid & 0xff, pid >> 8);
   return std::string(device) +
@@ -251,6 +394,20 @@ void EmulatedDevices::add_usb_board(std::shared_ptr<SimBoardFirmware> firmware,
                                     int address) {
   auto board = std::make_unique<UsbBoardEmulation>();
   board->firmware = std::move(firmware);
+  if (vendor_id == 0x1a86 &&
+      (product_id == 0x7523 || product_id == 0x7522 || product_id == 0x5523)) {
+    board->bridge = EmulatedBridge::Ch34x;
+    board->ep_in = 0x82;
+    board->ep_out = 0x02;
+    board->in_packet = 32;
+  } else if (vendor_id == 0x0403 &&
+             (product_id == 0x6001 || product_id == 0x6014 || product_id == 0x6015)) {
+    board->bridge = EmulatedBridge::Ftdi;
+    board->ep_in = 0x81;
+    board->ep_out = 0x02;
+    board->in_packet = 64;
+  }
+  board->state.kernel_driver = kernel_driver_of(board->bridge);
   board->handler = umockdev_ioctl_base_new();
   g_signal_connect(board->handler, "handle-ioctl", G_CALLBACK(handle_usb_ioctl), board.get());
   char node[64], sys[64];
@@ -271,7 +428,7 @@ void EmulatedDevices::add_usb_board(std::shared_ptr<SimBoardFirmware> firmware,
       (node + std::strlen("/dev/bus/usb/001/")) + "\nE: DEVNAME=" + node +
       "\nA: busnum=1\\n\nA: devnum=" + std::to_string(address) +
       "\\n\nA: speed=12\\n\nA: bConfigurationValue=1\\n\nA: idVendor=" + vidpid +
-      "\nH: descriptors=" + descriptors_hex(vendor_id, product_id) + "\n";
+      "\nH: descriptors=" + descriptors_hex(board->bridge, vendor_id, product_id) + "\n";
   if (!umockdev_testbed_add_from_string(impl_->testbed, description.c_str(), &error)) {
     const std::string msg = error ? error->message : "unknown";
     if (error) g_error_free(error);

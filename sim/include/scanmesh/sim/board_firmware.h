@@ -59,6 +59,8 @@ class SimBoardFirmware {
   bool unplugged() const;
   bool stalled() const;
   int commands_received() const;
+  //! G92 (set position) commands executed since the firmware object was made (resets too).
+  int position_declarations() const;
   //! Changes the faults at run time (tests arm a fault after the connect handshake).
   void set_faults(const BoardFaults& faults);
 
@@ -76,6 +78,7 @@ class SimBoardFirmware {
   std::deque<Pending> output_;
   Clock::time_point busy_until_;
   int commands_ = 0;
+  int position_declarations_ = 0;
   bool relative_ = false;
   bool motor_ = false;
   bool unplugged_ = false;

@@ -85,6 +85,11 @@ struct RigConfig {
 //! of it, slightly misaligned as real ones are (docs/acquisition.md lists the numbers).
 RigConfig builtin_ciclop_rig();
 
+//! The same rig with a sensor of width x height pixels: the focal lengths and the principal point
+//! scale with the sensor (pixel centres at x + 0.5 scale), everything else is kept. Used by
+//! `scan --sim --scene` and the emulated scan tests to render small frames of the same view.
+RigConfig rig_at_size(RigConfig rig, int width, int height);
+
 //! A planar chessboard fixed on the platter. Board frame: x along the corner columns, y along
 //! the corner rows, z = x cross y; inner corner (c, r) at (c * square_mm, r * square_mm, 0).
 //! The printed side is the one seen looking along +z (OpenCV's convention); the back is grey.
