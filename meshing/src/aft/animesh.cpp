@@ -216,6 +216,13 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
     }
   }
   am.flips += delaunay_flips(tris, store.pos, store.normal, constraint);
+  // Small-angle repair (a little above 20 deg so that later rounding cannot drop below it).
+  const detail::RepairStats rs =
+      detail::repair_small_angles(tris, labels, store, surface, constraint, boundary_nodes,
+                                  20.5 * M_PI / 180, 20.0 * M_PI / 180);
+  am.repair_operations = rs.operations;
+  am.repair_left_below_20 = rs.left_below_goal;
+  am.repair_forced_below_20 = rs.forced_below_goal;
   // Compact: drop nodes no triangle uses (segments bordering nothing meshed).
   std::vector<int> used(store.pos.size(), 0);
   for (const auto& t : tris)
