@@ -381,19 +381,79 @@ class Mesher {
       add_edge(c, b);
   }
 
+  // F(x) = r(phi, h) - rho at a point: > 0 inside the surface, < 0 outside.
+  std::optional<double> implicit_at(const Vector3d& x) const {
+    const Vector3d c = ScanSurface::to_cylindrical(x);
+    const auto r = S_.radius(c.x(), c.y());
+    if (!r) return std::nullopt;
+    return r->r - c.z();
+  }
+
   std::optional<Vector3d> construct_r(const Frame& f, double height) const {
-    // Rotation construction: the apex on the circle about the edge (plane of t2 and n),
-    // the root nearest the tangent direction on the left (cos delta > 0).
-    const auto roots = S_.intersect_circle(f.M, height, f.t2, f.n);
-    double best = 1e300;
+    // Rotation construction: the apex on the circle about the edge (plane of t2 and n), the
+    // root nearest the tangent direction on the left with cos delta >= 0.3. The circle is
+    // sampled outwards from delta = 0 on both sides at the grid of ScanSurface::
+    // intersect_circle (2 pi / steps, a quarter of the finest cell), and the search stops at
+    // the first bracketed sign change: the same root, bit for bit, as searching the whole
+    // circle with intersect_circle, without the ~1000 samples of the rest of it.
+    const double step = S_.sampling_step_mm();
     std::optional<Vector3d> r;
-    for (double d : roots) {
-      const double c = std::cos(d), s = std::sin(d);
-      if (c < 0.3) continue;
-      const double dev = std::fabs(std::atan2(s, c));
-      if (dev < best) {
-        best = dev;
-        r = f.M + height * (c * f.t2 + s * f.n);
+    if (height > 0 && step > 0) {
+      const long steps = std::max<long>(64, static_cast<long>(std::ceil(2 * M_PI * height / step)));
+      const double dt = 2 * M_PI / static_cast<double>(steps);
+      const double tol = 1e-6 / height, max_delta = std::acos(0.3);
+      auto point = [&](double d) {
+        return f.M + height * (std::cos(d) * f.t2 + std::sin(d) * f.n);
+      };
+      auto F = [&](double d) { return implicit_at(point(d)); };
+      auto refine = [&](double a, double fa, double b) {
+        for (int it = 0; it < 200 && b - a > tol; ++it) {
+          const double m = 0.5 * (a + b);
+          const auto fm = F(m);
+          if (!fm) break;
+          if ((*fm < 0) == (fa < 0)) {
+            a = m;
+            fa = *fm;
+          } else {
+            b = m;
+          }
+        }
+        return 0.5 * (a + b);
+      };
+      // Sample angles exactly as ScanSurface::intersect_circle does (k dt, the last one 2 pi),
+      // so that the root found is bit-identical to the whole-circle search.
+      auto theta_neg = [&](long k) { return k == 0 ? 2 * M_PI : (steps - k) * dt; };
+      const std::optional<double> f0 = F(0);
+      if (f0 && *f0 == 0.0) return point(0);
+      std::optional<double> prev_pos = f0, prev_neg = F(theta_neg(0));
+      const long kmax = std::min(steps / 2, static_cast<long>(std::ceil(max_delta / dt)) + 1);
+      for (long k = 1; k <= kmax && !r; ++k) {
+        double best = 1e300;
+        const double tp = k * dt, tn = theta_neg(k);
+        const std::optional<double> cp = F(tp), cn = F(tn);
+        auto consider = [&](double d) {
+          const double c = std::cos(d), sn = std::sin(d);
+          if (c < 0.3) return;
+          const double dev = std::fabs(std::atan2(sn, c));
+          if (dev < best) {
+            best = dev;
+            r = f.M + height * (c * f.t2 + sn * f.n);
+          }
+        };
+        if (prev_pos && cp) {
+          if (*cp == 0.0)
+            consider(tp);
+          else if (*prev_pos != 0.0 && (*prev_pos < 0) != (*cp < 0))
+            consider(refine((k - 1) * dt, *prev_pos, tp));
+        }
+        if (prev_neg && cn) {
+          if (*cn == 0.0)
+            consider(tn);
+          else if (*prev_neg != 0.0 && (*prev_neg < 0) != (*cn < 0))
+            consider(refine(tn, *cn, theta_neg(k - 1)));
+        }
+        prev_pos = cp;
+        prev_neg = cn;
       }
     }
     if (!r) {
