@@ -372,7 +372,7 @@ class Repair {
     const Vector3d n = S_.normal[v];
     Vector3d t1 = n.unitOrthogonal(), t2 = n.cross(t1);
     double step = 0.25 * len;
-    for (int it = 0; it < 24 && step > 0.005 * len; ++it) {
+    for (int it = 0; it < 12 && step > 0.02 * len; ++it) {
       const Vector3d x0 = S_.pos[v];
       double best = cur;
       Vector3d best_x = x0;
