@@ -104,6 +104,7 @@ class Repair {
       Vector3d pos, normal;
     };
     std::vector<Moved> moved;
+    std::vector<std::int64_t> cells;
     std::size_t n_tris = 0, n_verts = 0;
   };
 
@@ -128,7 +129,13 @@ class Repair {
     const auto b = cells_of(t);
     for (int x = b.min().x(); x <= b.max().x(); ++x)
       for (int y = b.min().y(); y <= b.max().y(); ++y)
-        for (int z = b.min().z(); z <= b.max().z(); ++z) grid_[cell_key(x, y, z)].push_back(t);
+        for (int z = b.min().z(); z <= b.max().z(); ++z) {
+          const std::int64_t key = cell_key(x, y, z);
+          auto& list = grid_[key];
+          if (!list.empty() && list.back() == t) continue;
+          list.push_back(t);
+          journal_.cells.push_back(key);  // popped again if the candidate is rolled back
+        }
   }
   // Pairs of intersecting triangles involving the triangles changed since begin().
   int new_intersections() const {
@@ -216,6 +223,8 @@ class Repair {
       S_.pos[it->v] = it->pos;
       S_.normal[it->v] = it->normal;
     }
+    for (auto it = journal_.cells.rbegin(); it != journal_.cells.rend(); ++it)
+      grid_[*it].pop_back();
     T_.resize(journal_.n_tris);
     L_.resize(journal_.n_tris);
     S_.params.resize(journal_.n_verts);
