@@ -43,6 +43,9 @@ class Repair {
     vt_.resize(S_.pos.size());
     for (std::size_t t = 0; t < T_.size(); ++t)
       for (int v : T_[t]) vt_[v].push_back(static_cast<int>(t));
+    double sum = 0;
+    for (const auto& f : T_) sum += (S_.pos[f[1]] - S_.pos[f[0]]).norm();
+    cell_ = std::max(0.5, 1.5 * sum / std::max<std::size_t>(1, T_.size()));
     for (std::size_t t = 0; t < T_.size(); ++t) insert(static_cast<int>(t));
   }
 
@@ -117,7 +120,7 @@ class Repair {
   Eigen::AlignedBox<int, 3> cells_of(int t) const {
     Eigen::AlignedBox<int, 3> b;
     for (int v : T_[t]) {
-      const Vector3d c = S_.pos[v] / kCell;
+      const Vector3d c = S_.pos[v] / cell_;
       b.extend(Eigen::Vector3i(static_cast<int>(std::floor(c.x())),
                                static_cast<int>(std::floor(c.y())),
                                static_cast<int>(std::floor(c.z()))));
@@ -564,7 +567,7 @@ class Repair {
   std::size_t fixed_;
   std::vector<std::vector<int>> vt_;
   Journal journal_;
-  static constexpr double kCell = 8.0;  // mm
+  double cell_ = 8.0;  // mm: 1.5 x the mean edge
   std::unordered_map<std::int64_t, std::vector<int>> grid_;
 };
 
