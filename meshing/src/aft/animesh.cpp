@@ -213,7 +213,7 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
   // Small-angle repair (a little above 20 deg so that later rounding cannot drop below it).
   const detail::RepairStats rs =
       detail::repair_small_angles(tris, labels, store, surface, constraint, boundary_nodes,
-                                  20.5 * M_PI / 180, 20.0 * M_PI / 180);
+                                  20.5 * M_PI / 180, 20.0 * M_PI / 180, settings.repair_rounds);
   am.repair_operations = rs.operations;
   am.repair_left_below_20 = rs.left_below_goal;
   am.repair_forced_below_20 = rs.forced_below_goal;
