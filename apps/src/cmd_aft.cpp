@@ -184,6 +184,12 @@ int run_animesh(const AnimeshArgs& a) {
   for (auto s : am.steiner) steiner += s;
   j["steiner_points"] = steiner;
   j["flips"] = am.flips;
+  j["small_angle_repair"] = {{"optimise", am.repair_operations[0]},
+                             {"flip", am.repair_operations[1]},
+                             {"collapse", am.repair_operations[2] + am.repair_operations[3]},
+                             {"split", am.repair_operations[4]},
+                             {"left_below_20_deg", am.repair_left_below_20},
+                             {"forced_below_20_deg", am.repair_forced_below_20}};
   j["time_s"] = {{"load_and_regions", t_load}, {"mesh", t_mesh}};
   j["quality"] = {{"min_angle_deg", q.min_angle_deg},
                   {"min_angle_away_from_sharp_junctions_deg", q.min_angle_non_exempt_deg},

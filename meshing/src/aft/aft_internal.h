@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <unordered_set>
 #include <vector>
 
 #include "scanmesh/meshing/aft/animesh.h"
@@ -57,5 +58,21 @@ struct TwoWayDistance {
   double mesh_to_surface_mm = 0, surface_to_mesh_mm = 0;
 };
 TwoWayDistance sampled_hausdorff(const AnimationMesh& am, const ScanSurface& surface, int samples);
+
+struct RepairStats {
+  //! Accepted composite operations: 0 optimise, 1 flip, 2/3 collapse, 4 split (each followed by
+  //! optimising the Steiner points it touched).
+  std::array<int, 5> operations{};
+  int left_below_goal = 0;    //!< triangles left below report_rad (a failure)
+  int forced_below_goal = 0;  //!< below report_rad at a corner of two constraint edges (input)
+//! The local small-angle repair after the front (quality_pass.cpp): triangles (with their
+//! labels) below `goal_rad` are improved by local operations that keep constraint edges and
+//! segment nodes (indices < boundary_nodes) fixed and Steiner points on the surface.
+RepairStats repair_small_angles(std::vector<std::array<int, 3>>& triangles,
+                                std::vector<int>& labels, NodeStore& nodes,
+                                const ScanSurface& surface,
+                                const std::unordered_set<std::uint64_t>& constraint,
+                                std::size_t boundary_nodes, double goal_rad, double report_rad,
+                                int rounds = 8);
 
 }  // namespace scanmesh::aft::detail

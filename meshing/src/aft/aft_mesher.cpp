@@ -8,10 +8,7 @@
 // rotating the ideal apex about the edge until it meets the surface.
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <queue>
-#include <set>
 #include <unordered_map>
 
 #include "aft_internal.h"
@@ -138,12 +135,6 @@ class Mesher {
         if (!progress_) {
           if (relaxed) {
             stats_.unmeshed_front_edges = static_cast<int>(live.size());
-            if (std::getenv("SCANMESH_AFT_DEBUG"))
-              for (int d : live)
-                std::fprintf(stderr, "left: %d->%d (%.5f %.4f)->(%.5f %.4f) n.n %g\n", edges_[d].a,
-                             edges_[d].b, N_.params[edges_[d].a].x(), N_.params[edges_[d].a].y(),
-                             N_.params[edges_[d].b].x(), N_.params[edges_[d].b].y(),
-                             N_.normal[edges_[d].a].dot(N_.normal[edges_[d].b]));
             break;
           }
           relaxed = true;
@@ -153,9 +144,6 @@ class Mesher {
         continue;
       }
       if (!edges_[e].alive) continue;
-      if (std::getenv("SCANMESH_AFT_DEBUG") && guard % 2000 == 0)
-        std::fprintf(stderr, "aft: iter %zu triangles %zu nodes %zu alive %zu\n", guard,
-                     triangles_.size(), N_.pos.size(), index_.size());
       if (try_edge(e, relaxed)) {
         progress_ = true;
         relaxed = false;
@@ -184,7 +172,6 @@ class Mesher {
     const int id = static_cast<int>(edges_.size());
     edges_.push_back({a, b, true, (N_.pos[b] - N_.pos[a]).norm()});
     index_[edge_key(a, b)] = id;
-    alive_.push_back(id);
     bucket(id);
     push(id);
   }
@@ -382,34 +369,6 @@ class Mesher {
 
   void add_triangle(int e, int c) {
     const int a = edges_[e].a, b = edges_[e].b;
-    if (const char* box = std::getenv("SCANMESH_AFT_BOX")) {
-      double x0, x1, y0, y1;
-      if (std::sscanf(box, "%lf,%lf,%lf,%lf", &x0, &x1, &y0, &y1) == 4) {
-        Vector2d cp = N_.params[c];
-        cp.x() = x0 + std::fmod(std::fmod(cp.x() - x0, 2 * M_PI) + 2 * M_PI, 2 * M_PI);
-        if (cp.x() < x0 || cp.x() > x1 || cp.y() < y0 || cp.y() > y1) {
-          std::fprintf(stderr,
-                       "outside: tri %d %d %d choice %d tri#%zu a=(%g,%g) b=(%g,%g) c=(%g,%g)\n", a,
-                       b, c, last_choice_, triangles_.size(), N_.params[a].x(), N_.params[a].y(),
-                       N_.params[b].x(), N_.params[b].y(), N_.params[c].x(), N_.params[c].y());
-          const Frame f = frame_of(a, b);
-          std::fprintf(stderr, "  local a (%g %g) b (%g %g) c (%g %g) n.na %g n.nb %g\n",
-                       f(N_.pos[a]).x(), f(N_.pos[a]).y(), f(N_.pos[b]).x(), f(N_.pos[b]).y(),
-                       f(N_.pos[c]).x(), f(N_.pos[c]).y(), f.n.dot(N_.normal[a]),
-                       f.n.dot(N_.normal[b]));
-          for (int id : alive_)
-            if (edges_[id].alive) {
-              const auto& E = edges_[id];
-              if ((N_.pos[E.a] - f.M).norm() < 12)
-                std::fprintf(stderr, "   front %d->%d (%g %g)->(%g %g) param (%g %g)\n", E.a, E.b,
-                             f(N_.pos[E.a]).x(), f(N_.pos[E.a]).y(), f(N_.pos[E.b]).x(),
-                             f(N_.pos[E.b]).y(), N_.params[E.a].x(), N_.params[E.a].y());
-            }
-          std::abort();
-        }
-      }
-    }
-    if (std::getenv("SCANMESH_AFT_OVERLAP")) check_overlap(a, b, c);
     triangles_.push_back({a, b, c});
     kill(e);
     if (const int r = find(c, a); r >= 0)
@@ -422,82 +381,85 @@ class Mesher {
       add_edge(c, b);
   }
 
+  // F(x) = r(phi, h) - rho at a point: > 0 inside the surface, < 0 outside.
+  std::optional<double> implicit_at(const Vector3d& x) const {
+    const Vector3d c = ScanSurface::to_cylindrical(x);
+    const auto r = S_.radius(c.x(), c.y());
+    if (!r) return std::nullopt;
+    return r->r - c.z();
+  }
+
   std::optional<Vector3d> construct_r(const Frame& f, double height) const {
-    // Rotation construction: the apex on the circle about the edge (plane of t2 and n),
-    // the root nearest the tangent direction on the left (cos delta > 0).
-    const auto roots = S_.intersect_circle(f.M, height, f.t2, f.n);
-    double best = 1e300;
+    // Rotation construction: the apex on the circle about the edge (plane of t2 and n), the
+    // root nearest the tangent direction on the left with cos delta >= 0.3. The circle is
+    // sampled outwards from delta = 0 on both sides at the grid of ScanSurface::
+    // intersect_circle (2 pi / steps, a quarter of the finest cell), and the search stops at
+    // the first bracketed sign change: the same root, bit for bit, as searching the whole
+    // circle with intersect_circle, without the ~1000 samples of the rest of it.
+    const double step = S_.sampling_step_mm();
     std::optional<Vector3d> r;
-    for (double d : roots) {
-      const double c = std::cos(d), s = std::sin(d);
-      if (c < 0.3) continue;
-      const double dev = std::fabs(std::atan2(s, c));
-      if (dev < best) {
-        best = dev;
-        r = f.M + height * (c * f.t2 + s * f.n);
+    if (height > 0 && step > 0) {
+      const long steps = std::max<long>(64, static_cast<long>(std::ceil(2 * M_PI * height / step)));
+      const double dt = 2 * M_PI / static_cast<double>(steps);
+      const double tol = 1e-6 / height, max_delta = std::acos(0.3);
+      auto point = [&](double d) {
+        return f.M + height * (std::cos(d) * f.t2 + std::sin(d) * f.n);
+      };
+      auto F = [&](double d) { return implicit_at(point(d)); };
+      auto refine = [&](double a, double fa, double b) {
+        for (int it = 0; it < 200 && b - a > tol; ++it) {
+          const double m = 0.5 * (a + b);
+          const auto fm = F(m);
+          if (!fm) break;
+          if ((*fm < 0) == (fa < 0)) {
+            a = m;
+            fa = *fm;
+          } else {
+            b = m;
+          }
+        }
+        return 0.5 * (a + b);
+      };
+      // Sample angles exactly as ScanSurface::intersect_circle does (k dt, the last one 2 pi),
+      // so that the root found is bit-identical to the whole-circle search.
+      auto theta_neg = [&](long k) { return k == 0 ? 2 * M_PI : (steps - k) * dt; };
+      const std::optional<double> f0 = F(0);
+      if (f0 && *f0 == 0.0) return point(0);
+      std::optional<double> prev_pos = f0, prev_neg = F(theta_neg(0));
+      const long kmax = std::min(steps / 2, static_cast<long>(std::ceil(max_delta / dt)) + 1);
+      for (long k = 1; k <= kmax && !r; ++k) {
+        double best = 1e300;
+        const double tp = k * dt, tn = theta_neg(k);
+        const std::optional<double> cp = F(tp), cn = F(tn);
+        auto consider = [&](double d) {
+          const double c = std::cos(d), sn = std::sin(d);
+          if (c < 0.3) return;
+          const double dev = std::fabs(std::atan2(sn, c));
+          if (dev < best) {
+            best = dev;
+            r = f.M + height * (c * f.t2 + sn * f.n);
+          }
+        };
+        if (prev_pos && cp) {
+          if (*cp == 0.0)
+            consider(tp);
+          else if (*prev_pos != 0.0 && (*prev_pos < 0) != (*cp < 0))
+            consider(refine((k - 1) * dt, *prev_pos, tp));
+        }
+        if (prev_neg && cn) {
+          if (*cn == 0.0)
+            consider(tn);
+          else if (*prev_neg != 0.0 && (*prev_neg < 0) != (*cn < 0))
+            consider(refine(tn, *cn, theta_neg(k - 1)));
+        }
+        prev_pos = cp;
+        prev_neg = cn;
       }
     }
     if (!r) {
       if (const auto p = S_.project(f.M + height * f.t2)) r = p->point;
     }
     return r;
-  }
-
-  void check_overlap(int a, int b, int c) {
-    const double rho = std::hypot(N_.pos[a].x(), N_.pos[a].y());
-    auto P = [&](int v) {
-      return Vector2d(rho * std::remainder(N_.params[v].x() - N_.params[a].x(), 2 * M_PI),
-                      N_.params[v].y() - N_.params[a].y());
-    };
-    const std::array<int, 3> t{a, b, c};
-    for (std::size_t k = 0; k < triangles_.size(); ++k) {
-      const auto& o = triangles_[k];
-      if ((N_.pos[o[0]] - N_.pos[a]).norm() > 40) continue;
-      // overlap if any vertex strictly inside the other or edges properly cross
-      bool bad = false;
-      for (int i = 0; i < 3 && !bad; ++i)
-        for (int j = 0; j < 3 && !bad; ++j) {
-          const int p1 = t[i], p2 = t[(i + 1) % 3], q1 = o[j], q2 = o[(j + 1) % 3];
-          if (p1 == q1 || p1 == q2 || p2 == q1 || p2 == q2) continue;
-          if (segments_cross(P(p1), P(p2), P(q1), P(q2), 1e-12)) bad = true;
-        }
-      auto inside = [&](const std::array<int, 3>& T, int v) {
-        if (v == T[0] || v == T[1] || v == T[2]) return false;
-        const Vector2d A = P(T[0]), B = P(T[1]), C = P(T[2]), X = P(v);
-        return cross2(B - A, X - A) > 1e-12 && cross2(C - B, X - B) > 1e-12 &&
-               cross2(A - C, X - C) > 1e-12;
-      };
-      for (int i = 0; i < 3; ++i) bad |= inside(t, o[i]) || inside(o, t[i]);
-      const std::set<int> st(t.begin(), t.end()), so(o.begin(), o.end());
-      if (st == so) bad = true;
-      if (bad) {
-        std::fprintf(stderr,
-                     "OVERLAP new #%zu (%d %d %d) with #%zu (%d %d %d) choice %d relaxed %d\n",
-                     triangles_.size(), a, b, c, k, o[0], o[1], o[2], last_choice_, int(relaxed_));
-        for (int v : {a, b, c, o[0], o[1], o[2]})
-          std::fprintf(stderr, "  %d: P (%g %g)\n", v, P(v).x(), P(v).y());
-        for (const auto& E : edges_)
-          if (E.alive && (E.a == a || E.b == a || E.a == b || E.b == b || E.a == c || E.b == c))
-            std::fprintf(stderr, "  front %d->%d  (%g %g)->(%g %g)\n", E.a, E.b, P(E.a).x(),
-                         P(E.a).y(), P(E.b).x(), P(E.b).y());
-        for (std::size_t k2 = 0; k2 < triangles_.size(); ++k2) {
-          const auto& o2 = triangles_[k2];
-          if (o2[0] == b || o2[1] == b || o2[2] == b)
-            std::fprintf(stderr, "  tri #%zu %d %d %d\n", k2, o2[0], o2[1], o2[2]);
-        }
-        std::abort();
-      }
-    }
-  }
-
-  Frame frame_of(int a, int b) const {
-    Frame f;
-    f.M = 0.5 * (N_.pos[a] + N_.pos[b]);
-    f.n = (N_.normal[a] + N_.normal[b]).normalized();
-    const Vector3d ab = N_.pos[b] - N_.pos[a];
-    f.t1 = (ab - ab.dot(f.n) * f.n).normalized();
-    f.t2 = f.n.cross(f.t1);
-    return f;
   }
 
   bool try_edge(int e, bool relaxed) {
@@ -549,7 +511,6 @@ class Mesher {
         break;
       }
     if (relaxed && s_node >= 0 && min_angle(A, B, N_.pos[s_node]) >= 0.35) {
-      last_choice_ = 9;
       add_triangle(e, s_node);
       ++stats_.chose_existing;
       return true;
@@ -582,7 +543,6 @@ class Mesher {
       if (min_angle(A, B, pos) < 0.35) return false;  // ~20 deg: never build a sliver
       const int c = N_.add(p, S_);
       if (c < 0) return false;
-      last_choice_ = choice;
       add_triangle(e, c);
       ++stats_.steiner_points;
       return true;
@@ -613,7 +573,6 @@ class Mesher {
       }
     }
     if (s_node >= 0) {
-      last_choice_ = 10 + choice;
       add_triangle(e, s_node);
       ++stats_.chose_existing;
       return true;
@@ -632,14 +591,12 @@ class Mesher {
   std::uint64_t rng_;
   std::vector<FEdge> edges_;
   std::unordered_map<std::uint64_t, int> index_;
-  std::vector<int> alive_;
   double cell_ = 1.0, max_len_ = 0.0;
   std::unordered_map<std::int64_t, std::vector<int>> grid_;
   std::vector<int> pool_;
   std::priority_queue<std::pair<double, int>> heap_;
   std::vector<std::array<int, 3>> triangles_;
   bool progress_ = false;
-  int last_choice_ = -1;
   bool relaxed_ = false;
 };
 

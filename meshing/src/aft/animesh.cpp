@@ -2,7 +2,6 @@
 // tangential smoothing, and the quality report.
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <set>
 #include <sstream>
 #include <unordered_map>
@@ -119,17 +118,12 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
   for (std::size_t r = 0; r < g.regions.size(); ++r) {
     const Region& reg = g.regions[r];
     if (reg.opening) continue;
-    if (const char* only = std::getenv("SCANMESH_AFT_ONLY");
-        only && std::atoi(only) != static_cast<int>(r))
-      continue;
     detail::RegionMeshInput in;
     in.unit_mm = reg.unit_mm > 0 ? reg.unit_mm : settings.default_unit_mm;
     in.strategy = settings.strategy;
     in.chordal_tolerance_mm = settings.chordal_tolerance_mm;
     in.min_unit_mm = settings.min_unit_mm;
     in.seed = settings.seed + 1000003ull * r;
-    if (const char* m = std::getenv("SCANMESH_AFT_MAX_STEPS"))
-      in.max_steps = std::strtoul(m, nullptr, 10);
     std::vector<int> cycles{reg.outer};
     cycles.insert(cycles.end(), reg.inner.begin(), reg.inner.end());
     // The region as the polygon of its boundary nodes (the chords the front starts from, not
@@ -222,6 +216,13 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
     }
   }
   am.flips += delaunay_flips(tris, store.pos, store.normal, constraint);
+  // Small-angle repair (a little above 20 deg so that later rounding cannot drop below it).
+  const detail::RepairStats rs =
+      detail::repair_small_angles(tris, labels, store, surface, constraint, boundary_nodes,
+                                  20.5 * M_PI / 180, 20.0 * M_PI / 180, settings.repair_rounds);
+  am.repair_operations = rs.operations;
+  am.repair_left_below_20 = rs.left_below_goal;
+  am.repair_forced_below_20 = rs.forced_below_goal;
   // Compact: drop nodes no triangle uses (segments bordering nothing meshed).
   std::vector<int> used(store.pos.size(), 0);
   for (const auto& t : tris)

@@ -99,6 +99,10 @@ class ScanSurface {
   //! The implicit view F(x) = r(phi(x), h(x)) - rho(x) and its gradient.
   std::optional<ImplicitSample> implicit(const Eigen::Vector3d& x) const;
 
+  //! The root-search step of intersect_segment / intersect_circle (a quarter of the finest
+  //! cell), for callers that search a part of a curve themselves.
+  double sampling_step_mm() const { return sampling_step_mm_; }
+
   //! Cylindrical coordinates of a point: phi in [phi0, phi0 + 2 pi), h, rho.
   static Eigen::Vector3d to_cylindrical(const Eigen::Vector3d& x);
 

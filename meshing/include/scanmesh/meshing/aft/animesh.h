@@ -53,6 +53,10 @@ struct AnimationMesh {
   std::map<std::string, std::vector<int>> seams;  //!< seam line id -> ordered vertex list
   std::vector<RegionMeshStats> region_stats;
   int flips = 0;
+  //! Small-angle repair: accepted operations (optimise, flip, collapse into one end, into the
+  //! other, split), triangles left below 20 deg, of which at a sharp input corner.
+  std::array<int, 5> repair_operations{};
+  int repair_left_below_20 = 0, repair_forced_below_20 = 0;
 };
 
 //! Meshes every region (openings stay empty) and stitches them: segment nodes appear once.

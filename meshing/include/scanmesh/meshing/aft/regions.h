@@ -88,11 +88,12 @@ struct RegionSettings {
   std::string default_mesher = "aft";
   EdgeStrategy strategy = EdgeStrategy::Shortest;
   SegmentInit segment_init = SegmentInit::Equidistant;
-  double curvature_weight_mm = 10.0;   //!< curvature init: measure = arc + weight * turning
+  double curvature_weight_mm = 10.0;  //!< curvature init: measure = arc + weight * turning
   double chordal_tolerance_mm = 0.5;  //!< curvature-adaptive size: sagitta bound
-  double min_unit_mm = 0.3;            //!< lower bound of the adaptive size
-  int relax_iterations = 30;           //!< segment nodes "on rails"
-  int smooth_iterations = 3;           //!< tangential smoothing of Steiner points
+  double min_unit_mm = 0.3;           //!< lower bound of the adaptive size
+  int relax_iterations = 30;          //!< segment nodes "on rails"
+  int smooth_iterations = 3;          //!< tangential smoothing of Steiner points
+  int repair_rounds = 8;              //!< small-angle repair sweeps (0: off)
   std::uint64_t seed = 1;
   std::vector<RegionRule> regions;
 };

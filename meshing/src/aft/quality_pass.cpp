@@ -1,0 +1,586 @@
+// The local small-angle repair after the advancing front (docs/animation-meshes.md,
+// "Small angles"): every triangle whose minimum angle is below the goal is attacked by a few
+// composite local operations — optimise its Steiner points on the surface, flip one of its
+// edges, collapse a short edge into its neighbour, split its longest edge — each followed by
+// optimising the Steiner points it touched. The candidate that best improves the sorted angle
+// list of the neighbourhood is kept. Constraint (segment) edges are never flipped, split or
+// collapsed and segment nodes never move, so every animation line stays a chain of mesh edges
+// and every region keeps its boundary; a Steiner point only moves on the surface (projected and
+// re-lifted through (phi, h)), so it stays on the scan surface.
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <unordered_map>
+
+#include "aft_internal.h"
+#include "scanmesh/meshing/mesh_check.h"
+
+namespace scanmesh::aft::detail {
+
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+
+namespace {
+
+std::uint64_t ukey(int a, int b) {
+  if (a > b) std::swap(a, b);
+  return (static_cast<std::uint64_t>(a) << 32) | static_cast<std::uint32_t>(b);
+}
+
+double angle_at(const Vector3d& p, const Vector3d& q, const Vector3d& r) {
+  const Vector3d u = q - p, v = r - p;
+  return std::atan2(u.cross(v).norm(), u.dot(v));
+}
+
+constexpr std::array<int, 3> kDead{-1, -1, -1};
+
+class Repair {
+ public:
+  Repair(std::vector<std::array<int, 3>>& T, std::vector<int>& labels, NodeStore& store,
+         const ScanSurface& surface, const std::unordered_set<std::uint64_t>& constraint,
+         std::size_t boundary_nodes)
+      : T_(T), L_(labels), S_(store), surf_(surface), C_(constraint), fixed_(boundary_nodes) {
+    vt_.resize(S_.pos.size());
+    for (std::size_t t = 0; t < T_.size(); ++t)
+      for (int v : T_[t]) vt_[v].push_back(static_cast<int>(t));
+    double sum = 0;
+    for (const auto& f : T_) sum += (S_.pos[f[1]] - S_.pos[f[0]]).norm();
+    cell_ = std::max(0.5, 1.5 * sum / std::max<std::size_t>(1, T_.size()));
+    for (std::size_t t = 0; t < T_.size(); ++t) insert(static_cast<int>(t));
+  }
+
+  double tri_min(int t) const {
+    const auto& f = T_[t];
+    const Vector3d &a = S_.pos[f[0]], &b = S_.pos[f[1]], &c = S_.pos[f[2]];
+    return std::min({angle_at(a, b, c), angle_at(b, c, a), angle_at(c, a, b)});
+  }
+
+  // True if the smallest angle of t sits between two constraint edges: the input fixes it.
+  bool forced(int t) const {
+    const auto& f = T_[t];
+    int k = 0;
+    double best = 1e9;
+    for (int i = 0; i < 3; ++i) {
+      const double a = angle_at(S_.pos[f[i]], S_.pos[f[(i + 1) % 3]], S_.pos[f[(i + 2) % 3]]);
+      if (a < best) {
+        best = a;
+        k = i;
+      }
+    }
+    return C_.count(ukey(f[k], f[(k + 1) % 3])) && C_.count(ukey(f[k], f[(k + 2) % 3]));
+  }
+
+  RepairStats run(double goal, double report, int rounds) {
+    RepairStats st;
+    for (int round = 0; round < rounds; ++round) {
+      bool changed = false;
+      for (std::size_t t = 0; t < T_.size(); ++t) {
+        if (T_[t][0] < 0 || tri_min(static_cast<int>(t)) >= goal || forced(static_cast<int>(t)))
+          continue;
+        if (improve(static_cast<int>(t), goal, st)) changed = true;
+      }
+      if (!changed) break;
+    }
+    // Compact: drop dead triangles.
+    std::size_t w = 0;
+    for (std::size_t t = 0; t < T_.size(); ++t)
+      if (T_[t][0] >= 0) {
+        T_[w] = T_[t];
+        L_[w] = L_[t];
+        ++w;
+      }
+    T_.resize(w);
+    L_.resize(w);
+    for (std::size_t t = 0; t < T_.size(); ++t) {
+      const double m = tri_min(static_cast<int>(t));
+      if (m < report) (forced(static_cast<int>(t)) ? st.forced_below_goal : st.left_below_goal)++;
+    }
+    return st;
+  }
+
+ private:
+  struct Journal {
+    std::vector<std::pair<int, std::array<int, 3>>> tris;
+    struct Moved {
+      int v;
+      Vector2d param;
+      Vector3d pos, normal;
+    };
+    std::vector<Moved> moved;
+    std::vector<std::int64_t> cells;
+    std::size_t n_tris = 0, n_verts = 0;
+  };
+
+  // Triangles hashed by the cells their bounding box overlaps (entries are never removed:
+  // a query re-checks the current triangle), for the 3D intersection test of changed ones.
+  std::int64_t cell_key(int x, int y, int z) const {
+    return (static_cast<std::int64_t>(x & 0x1fffff) << 42) |
+           (static_cast<std::int64_t>(y & 0x1fffff) << 21) | (z & 0x1fffff);
+  }
+  Eigen::AlignedBox<int, 3> cells_of(int t) const {
+    Eigen::AlignedBox<int, 3> b;
+    for (int v : T_[t]) {
+      const Vector3d c = S_.pos[v] / cell_;
+      b.extend(Eigen::Vector3i(static_cast<int>(std::floor(c.x())),
+                               static_cast<int>(std::floor(c.y())),
+                               static_cast<int>(std::floor(c.z()))));
+    }
+    return b;
+  }
+  void insert(int t) {
+    if (T_[t][0] < 0) return;
+    const auto b = cells_of(t);
+    for (int x = b.min().x(); x <= b.max().x(); ++x)
+      for (int y = b.min().y(); y <= b.max().y(); ++y)
+        for (int z = b.min().z(); z <= b.max().z(); ++z) {
+          const std::int64_t key = cell_key(x, y, z);
+          auto& list = grid_[key];
+          if (!list.empty() && list.back() == t) continue;
+          list.push_back(t);
+          journal_.cells.push_back(key);  // popped again if the candidate is rolled back
+        }
+  }
+  // Pairs of intersecting triangles involving the triangles changed since begin().
+  int new_intersections() const {
+    std::vector<int> changed;
+    for (const auto& [t, f] : journal_.tris)
+      if (T_[t][0] >= 0) changed.push_back(t);
+    for (const auto& m : journal_.moved)
+      for (int t : vt_[m.v]) changed.push_back(t);
+    std::sort(changed.begin(), changed.end());
+    changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
+    int hits = 0;
+    std::vector<int> near;
+    for (int c : changed) {
+      near.clear();
+      const auto b = cells_of(c);
+      for (int x = b.min().x(); x <= b.max().x(); ++x)
+        for (int y = b.min().y(); y <= b.max().y(); ++y)
+          for (int z = b.min().z(); z <= b.max().z(); ++z)
+            if (const auto it = grid_.find(cell_key(x, y, z)); it != grid_.end())
+              near.insert(near.end(), it->second.begin(), it->second.end());
+      std::sort(near.begin(), near.end());
+      near.erase(std::unique(near.begin(), near.end()), near.end());
+      for (int u : near)
+        if (u != c && u < static_cast<int>(T_.size()) && T_[u][0] >= 0 &&
+            triangles_intersect(S_.pos, T_[c], T_[u]))
+          ++hits;
+    }
+    return hits;
+  }
+
+  void set_tri(int t, const std::array<int, 3>& f) {
+    journal_.tris.push_back({t, T_[t]});
+    if (T_[t][0] >= 0)
+      for (int v : T_[t]) {
+        auto& l = vt_[v];
+        l.erase(std::find(l.begin(), l.end(), t));
+      }
+    T_[t] = f;
+    if (f[0] >= 0)
+      for (int v : f) vt_[v].push_back(t);
+    insert(t);
+  }
+  int add_tri(const std::array<int, 3>& f, int label) {
+    T_.push_back(kDead);
+    L_.push_back(label);
+    const int t = static_cast<int>(T_.size()) - 1;
+    set_tri(t, f);
+    return t;
+  }
+  int add_vertex(const Vector3d& near_point, double near_phi) {
+    const auto pr = surf_.project(near_point);
+    if (!pr) return -1;
+    const int v = S_.add(param_of(pr->point, near_phi), surf_);
+    if (v >= 0) vt_.emplace_back();
+    return v;
+  }
+  bool move_vertex(int v, const Vector3d& target) {
+    const auto pr = surf_.project(target);
+    if (!pr) return false;
+    const Journal::Moved old{v, S_.params[v], S_.pos[v], S_.normal[v]};
+    if (!S_.move(v, param_of(pr->point, S_.params[v].x()), surf_)) return false;
+    journal_.moved.push_back(old);
+    for (int t : vt_[v]) insert(t);
+    return true;
+  }
+  void begin() {
+    journal_ = Journal{};
+    journal_.n_tris = T_.size();
+    journal_.n_verts = S_.pos.size();
+  }
+  void rollback() {
+    for (auto it = journal_.tris.rbegin(); it != journal_.tris.rend(); ++it) {
+      const int t = it->first;
+      if (T_[t][0] >= 0)
+        for (int v : T_[t]) {
+          auto& l = vt_[v];
+          l.erase(std::find(l.begin(), l.end(), t));
+        }
+      T_[t] = it->second;
+      if (T_[t][0] >= 0)
+        for (int v : T_[t]) vt_[v].push_back(t);
+    }
+    for (auto it = journal_.moved.rbegin(); it != journal_.moved.rend(); ++it) {
+      S_.params[it->v] = it->param;
+      S_.pos[it->v] = it->pos;
+      S_.normal[it->v] = it->normal;
+    }
+    for (auto it = journal_.cells.rbegin(); it != journal_.cells.rend(); ++it)
+      grid_[*it].pop_back();
+    T_.resize(journal_.n_tris);
+    L_.resize(journal_.n_tris);
+    S_.params.resize(journal_.n_verts);
+    S_.pos.resize(journal_.n_verts);
+    S_.normal.resize(journal_.n_verts);
+    vt_.resize(journal_.n_verts);
+    // vt_ lists are restored by the reverse set_tri, but their order may differ: sort them so
+    // that the outcome does not depend on the history of rejected candidates.
+    for (const auto& [t, f] : journal_.tris)
+      for (int v : f)
+        if (v >= 0 && v < static_cast<int>(vt_.size())) std::sort(vt_[v].begin(), vt_[v].end());
+    journal_ = Journal{};
+  }
+
+  // The triangle is counter-clockwise in the (phi, h) plane. The surface is a graph over it,
+  // so a valid mesh is a planar triangulation there; 3D normals are no guide at creases such as
+  // the chin line, where the vertex normals of one triangle differ by more than 90 deg.
+  bool faces_out(int t) const {
+    const auto& f = T_[t];
+    const Vector2d& a = S_.params[f[0]];
+    auto rel = [&](int v) {
+      const Vector2d& p = S_.params[v];
+      return Vector2d(std::remainder(p.x() - a.x(), 2 * M_PI), p.y() - a.y());
+    };
+    const double rho = std::max(1e-6, std::hypot(S_.pos[f[0]].x(), S_.pos[f[0]].y()));
+    const Vector2d b = rel(f[1]), c = rel(f[2]);
+    return rho * (b.x() * c.y() - b.y() * c.x()) > 0;
+  }
+
+  // The star of Steiner point v, projected on its tangent plane, winds once round it: the
+  // fan does not fold over itself (a fold can keep every triangle facing outwards).
+  bool simple_star(int v) const {
+    const Vector3d& n = S_.normal[v];
+    const Vector3d t1 = n.unitOrthogonal(), t2 = n.cross(t1);
+    double sum = 0;
+    for (int t : vt_[v]) {
+      const auto& f = T_[t];
+      int k = 0;
+      while (f[k] != v) ++k;
+      const Vector3d a = S_.pos[f[(k + 1) % 3]] - S_.pos[v], b = S_.pos[f[(k + 2) % 3]] - S_.pos[v];
+      const double ax = a.dot(t1), ay = a.dot(t2), bx = b.dot(t1), by = b.dot(t2);
+      sum += std::atan2(ax * by - ay * bx, ax * bx + ay * by);
+    }
+    return std::fabs(sum - 2 * M_PI) < 1e-3;
+  }
+
+  std::vector<int> edge_tris(int p, int q) const {
+    std::vector<int> r;
+    for (int t : vt_[p])
+      if (T_[t][0] == q || T_[t][1] == q || T_[t][2] == q) r.push_back(t);
+    return r;
+  }
+  bool has_edge(int p, int q) const { return !edge_tris(p, q).empty(); }
+  std::vector<int> neighbours(int v) const {
+    std::vector<int> r;
+    for (int t : vt_[v])
+      for (int w : T_[t])
+        if (w != v) r.push_back(w);
+    std::sort(r.begin(), r.end());
+    r.erase(std::unique(r.begin(), r.end()), r.end());
+    return r;
+  }
+  bool steiner(int v) const { return v >= static_cast<int>(fixed_); }
+
+  // Edge p-q of two triangles (p, q, r) and (q, p, s) becomes r-s.
+  bool flip(int p, int q) {
+    if (C_.count(ukey(p, q))) return false;
+    const auto ts = edge_tris(p, q);
+    if (ts.size() != 2 || L_[ts[0]] != L_[ts[1]]) return false;
+    int t1 = ts[0], t2 = ts[1];
+    auto rot = [&](int t, int first) {
+      std::array<int, 3> f = T_[t];
+      while (f[0] != first) std::rotate(f.begin(), f.begin() + 1, f.end());
+      return f;
+    };
+    std::array<int, 3> f1 = rot(t1, p);
+    if (f1[1] != q) {
+      std::swap(t1, t2);
+      f1 = rot(t1, p);
+      if (f1[1] != q) return false;
+    }
+    const std::array<int, 3> f2 = rot(t2, q);
+    if (f2[1] != p) return false;
+    const int r = f1[2], s = f2[2];
+    if (r == s || has_edge(r, s)) return false;
+    set_tri(t1, {r, p, s});
+    set_tri(t2, {s, q, r});
+    return true;
+  }
+
+  // Steiner point q merges into p (p keeps its place).
+  bool collapse(int q, int p) {
+    if (!steiner(q)) return false;
+    const auto ts = edge_tris(p, q);
+    if (ts.size() != 2) return false;
+    std::vector<int> opp;
+    for (int t : ts)
+      for (int w : T_[t])
+        if (w != p && w != q) opp.push_back(w);
+    std::sort(opp.begin(), opp.end());
+    const auto np = neighbours(p), nq = neighbours(q);
+    std::vector<int> common;
+    std::set_intersection(np.begin(), np.end(), nq.begin(), nq.end(), std::back_inserter(common));
+    if (common != opp) return false;  // link condition
+    for (int t : ts) set_tri(t, kDead);
+    const std::vector<int> around = vt_[q];
+    for (int t : around) {
+      std::array<int, 3> f = T_[t];
+      for (int& w : f)
+        if (w == q) w = p;
+      set_tri(t, f);
+    }
+    return true;
+  }
+
+  // A new surface point on edge p-q (not a constraint), both triangles split in two.
+  int split(int p, int q) {
+    if (C_.count(ukey(p, q))) return -1;
+    const auto ts = edge_tris(p, q);
+    if (ts.size() != 2) return -1;
+    const int m = add_vertex(0.5 * (S_.pos[p] + S_.pos[q]), S_.params[p].x());
+    if (m < 0) return -1;
+    for (int t : ts) {
+      std::array<int, 3> f = T_[t];
+      int k = 0;
+      while (!((f[k] == p && f[(k + 1) % 3] == q) || (f[k] == q && f[(k + 1) % 3] == p))) ++k;
+      const int a = f[k], b = f[(k + 1) % 3], c = f[(k + 2) % 3];
+      set_tri(t, {a, m, c});
+      add_tri({m, b, c}, L_[t]);
+    }
+    return m;
+  }
+
+  // Smallest incident angle, minus pi per incident triangle facing away from the surface.
+  double vertex_min(int v) const {
+    double m = 1e9;
+    int folded = 0;
+    for (int t : vt_[v]) {
+      folded += !faces_out(t);
+      m = std::min(m, tri_min(t));
+    }
+    folded += !simple_star(v);
+    return m - M_PI * folded;
+  }
+
+  // Pattern search on the tangent plane maximising the smallest incident angle.
+  void optimise(int v) {
+    if (!steiner(v) || vt_[v].empty()) return;
+    double cur = vertex_min(v);
+    double len = 0;
+    const auto nb = neighbours(v);
+    for (int w : nb) len += (S_.pos[w] - S_.pos[v]).norm();
+    len /= std::max<std::size_t>(1, nb.size());
+    const Vector3d n = S_.normal[v];
+    Vector3d t1 = n.unitOrthogonal(), t2 = n.cross(t1);
+    double step = 0.25 * len;
+    for (int it = 0; it < 12 && step > 0.02 * len; ++it) {
+      const Vector3d x0 = S_.pos[v];
+      double best = cur;
+      Vector3d best_x = x0;
+      for (int d = 0; d < 8; ++d) {
+        const double a = d * M_PI / 4;
+        const Vector3d x = x0 + step * (std::cos(a) * t1 + std::sin(a) * t2);
+        const auto pr = surf_.project(x);
+        if (!pr) continue;
+        const Vector3d save_pos = S_.pos[v], save_n = S_.normal[v];
+        const Vector2d save_p = S_.params[v];
+        if (!S_.move(v, param_of(pr->point, save_p.x()), surf_)) continue;
+        const double m = vertex_min(v);
+        if (m > best + 1e-9) {
+          best = m;
+          best_x = x;
+        }
+        S_.pos[v] = save_pos;
+        S_.normal[v] = save_n;
+        S_.params[v] = save_p;
+      }
+      if (best > cur + 1e-9 && move_vertex(v, best_x)) {
+        cur = best;
+      } else {
+        step *= 0.5;
+      }
+    }
+  }
+
+  void optimise_all(const std::vector<int>& vs) {
+    for (int pass = 0; pass < 2; ++pass)
+      for (int v : vs)
+        if (v < static_cast<int>(S_.pos.size())) optimise(v);
+  }
+
+  // The neighbourhood whose triangles an operation on t can change, and its score: the
+  // ascending list of triangle minimum angles capped at the goal (lexicographically larger is
+  // better); empty if any triangle faces away from the surface.
+  std::vector<int> region_of(int t) const {
+    std::vector<int> vs(T_[t].begin(), T_[t].end());
+    for (int ring = 0; ring < 2; ++ring) {
+      std::vector<int> next = vs;
+      for (int v : vs)
+        for (int w : neighbours(v)) next.push_back(w);
+      std::sort(next.begin(), next.end());
+      next.erase(std::unique(next.begin(), next.end()), next.end());
+      vs = next;
+    }
+    return vs;
+  }
+  struct Score {
+    int folded = 0;         // triangles facing away from the surface normals
+    std::vector<double> s;  // ascending minimum angles, capped
+  };
+  Score score(const std::vector<int>& vs, double cap) const {
+    std::vector<int> ts;
+    for (int v : vs)
+      if (v < static_cast<int>(vt_.size()))
+        for (int t : vt_[v]) ts.push_back(t);
+    for (std::size_t v = journal_.n_verts; v < vt_.size(); ++v)
+      for (int t : vt_[v]) ts.push_back(t);
+    std::sort(ts.begin(), ts.end());
+    ts.erase(std::unique(ts.begin(), ts.end()), ts.end());
+    Score sc;
+    sc.folded += new_intersections();
+    for (int t : ts) {
+      if (!faces_out(t)) ++sc.folded;
+      sc.s.push_back(std::min(cap, tri_min(t)));
+    }
+    std::sort(sc.s.begin(), sc.s.end());
+    return sc;
+  }
+  static bool better(const Score& a, const Score& b) {
+    if (a.folded != b.folded) return a.folded < b.folded;
+    for (std::size_t i = 0; i < std::min(a.s.size(), b.s.size()); ++i) {
+      if (a.s[i] > b.s[i] + 1e-7) return true;
+      if (a.s[i] < b.s[i] - 1e-7) return false;
+    }
+    return false;
+  }
+
+  // Candidate k on triangle f; false if it does not apply.
+  bool apply(const std::array<int, 3>& f, int k) {
+    const int kind = k / 3, i = k % 3;
+    const int p = f[i], q = f[(i + 1) % 3];
+    switch (kind) {
+      case 0: {  // optimise the triangle's own Steiner points (i = 0) or its whole 1-ring (1)
+        if (i == 2) return false;
+        std::vector<int> vs(f.begin(), f.end());
+        if (i == 1)
+          for (int v : f)
+            for (int w : neighbours(v)) vs.push_back(w);
+        std::sort(vs.begin(), vs.end());
+        vs.erase(std::unique(vs.begin(), vs.end()), vs.end());
+        optimise_all(vs);
+        return true;
+      }
+      case 1: {  // flip side i
+        std::vector<int> quad;
+        for (int t : edge_tris(p, q))
+          for (int w : T_[t]) quad.push_back(w);
+        if (!flip(p, q)) return false;
+        optimise_all(quad);
+        return true;
+      }
+      case 2:
+      case 3: {  // collapse side i, into p (kind 2) or into q (kind 3)
+        const int from = kind == 2 ? q : p, to = kind == 2 ? p : q;
+        if (!collapse(from, to)) return false;
+        std::vector<int> vs = neighbours(to);
+        vs.push_back(to);
+        optimise_all(vs);
+        return true;
+      }
+      case 4: {  // split side i, flip around the new point, optimise
+        const int m = split(p, q);
+        if (m < 0) return false;
+        for (int pass = 0; pass < 2; ++pass)
+          for (int t : std::vector<int>(vt_[m])) {
+            if (T_[t][0] < 0) continue;
+            int j = 0;
+            while (T_[t][j] != m) ++j;
+            const int a = T_[t][(j + 1) % 3], b = T_[t][(j + 2) % 3];
+            const auto before = score({a, b, m}, 10);
+            const std::size_t mark = journal_.tris.size();
+            if (!flip(a, b)) continue;
+            if (!better(score({a, b, m}, 10), before)) {
+              // undo just this flip
+              while (journal_.tris.size() > mark) {
+                const auto [tt, old] = journal_.tris.back();
+                journal_.tris.pop_back();
+                for (int v : T_[tt]) {
+                  auto& l = vt_[v];
+                  l.erase(std::find(l.begin(), l.end(), tt));
+                }
+                T_[tt] = old;
+                for (int v : old) vt_[v].push_back(tt);
+              }
+            }
+          }
+        std::vector<int> vs = neighbours(m);
+        vs.push_back(m);
+        optimise_all(vs);
+        return true;
+      }
+    }
+    return false;
+  }
+
+  bool improve(int t, double goal, RepairStats& st) {
+    const std::array<int, 3> f = T_[t];
+    const std::vector<int> region = region_of(t);
+    begin();
+    const Score base = score(region, goal);
+    int best_k = -1;
+    Score best = base;
+    for (int k = 0; k < 15; ++k) {
+      begin();
+      if (apply(f, k)) {
+        const auto s = score(region, goal);
+        if (better(s, best)) {
+          best = s;
+          best_k = k;
+        }
+      }
+      rollback();
+    }
+    if (best_k < 0) return false;
+    begin();
+    apply(f, best_k);
+    journal_ = Journal{};
+    ++st.operations[best_k / 3];
+    return true;
+  }
+
+  std::vector<std::array<int, 3>>& T_;
+  std::vector<int>& L_;
+  NodeStore& S_;
+  const ScanSurface& surf_;
+  const std::unordered_set<std::uint64_t>& C_;
+  std::size_t fixed_;
+  std::vector<std::vector<int>> vt_;
+  Journal journal_;
+  double cell_ = 8.0;  // mm: 1.5 x the mean edge
+  std::unordered_map<std::int64_t, std::vector<int>> grid_;
+};
+
+}  // namespace
+
+RepairStats repair_small_angles(std::vector<std::array<int, 3>>& triangles,
+                                std::vector<int>& labels, NodeStore& nodes,
+                                const ScanSurface& surface,
+                                const std::unordered_set<std::uint64_t>& constraint,
+                                std::size_t boundary_nodes, double goal_rad, double report_rad,
+                                int rounds) {
+  Repair r(triangles, labels, nodes, surface, constraint, boundary_nodes);
+  return r.run(goal_rad, report_rad, rounds);
+}
+
+}  // namespace scanmesh::aft::detail
