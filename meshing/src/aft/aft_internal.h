@@ -65,6 +65,8 @@ struct RepairStats {
   std::array<int, 5> operations{};
   int left_below_goal = 0;    //!< triangles left below report_rad (a failure)
   int forced_below_goal = 0;  //!< below report_rad at a corner of two constraint edges (input)
+};
+
 //! The local small-angle repair after the front (quality_pass.cpp): triangles (with their
 //! labels) below `goal_rad` are improved by local operations that keep constraint edges and
 //! segment nodes (indices < boundary_nodes) fixed and Steiner points on the surface.
