@@ -286,7 +286,8 @@ struct SpringNetwork::Impl {
   }
 
   // ---- Edge flip towards valence 6 (not in the report; switchable) -----------------------
-  bool try_flip(int a, int b) {
+  // `glide`: skip the valence criterion (a dislocation glide step, remove_dislocations()).
+  bool try_flip(int a, int b, bool glide = false) {
     auto ef = edge_faces(a, b);
     if (ef.size() != 2) return false;
     if (!has_directed(ef[0], a, b)) std::swap(ef[0], ef[1]);
@@ -302,7 +303,7 @@ struct SpringNetwork::Impl {
         sq(va - target(a)) + sq(vb - target(b)) + sq(vc - target(c)) + sq(vd - target(d));
     const int after = sq(va - 1 - target(a)) + sq(vb - 1 - target(b)) + sq(vc + 1 - target(c)) +
                       sq(vd + 1 - target(d));
-    if (after >= before) return false;
+    if (after >= before && !glide) return false;
     const std::array<int, 3> t0{a, d, c}, t1{b, c, d};
     const Vector3d n0 = face_normal(t0), n1 = face_normal(t1);
     const Vector3d old_n =
@@ -325,6 +326,69 @@ struct SpringNetwork::Impl {
     springs[edge_key(c, d)] = make_spring(c, d, rest);
     mark(c, d), mark(a, c), mark(b, c), mark(a, d), mark(b, d);
     return true;
+  }
+
+  // ---- Dislocation removal (an addition; docs/particles.md, decision 33) -----------------
+  // An adjacent valence-7/valence-5 pair is a lattice dislocation: no flip that lowers the
+  // sum of squared valence deviations exists around it, so the greedy flips of decision 12
+  // leave it, and its spokes carry the largest strains of the mesh. A "glide" flip of the
+  // edge (seven, w), w the 6-valent common neighbour of the pair on one side, moves the pair
+  // one lattice step (7,5,6,6 -> 6,6,5,7) at no valence cost. Each pair is glided up to
+  // `max_glide` steps in each of its two directions; as soon as the moving 7 or 5 can be
+  // cancelled by an improving flip (it met a defect of opposite sign, e.g. an isolated 5) the
+  // path is kept, otherwise it is undone. Returns the number of cancelled pairs.
+  bool improving_flip_around(int x) {
+    if (!verts[x].alive) return false;
+    for (int y : neighbors(x))
+      if (try_flip(x, y)) return true;
+    return false;
+  }
+  int remove_dislocations(int max_glide) {
+    int removed = 0;
+    auto interior = [&](int v, int val) {
+      return verts[v].alive && !verts[v].boundary && fast_valence(v) == val;
+    };
+    for (std::size_t i = 0; i < verts.size(); ++i) {
+      const int v = static_cast<int>(i);
+      if (!interior(v, 7)) continue;
+      bool done = false;
+      for (int c : neighbors(v)) {
+        if (done || !interior(v, 7)) break;
+        if (!interior(c, 5)) continue;
+        const auto ef = edge_faces(v, c);
+        if (ef.size() != 2) continue;
+        const std::array<int, 2> sides{opposite(ef[0], v, c), opposite(ef[1], v, c)};
+        for (int side = 0; side < 2 && !done; ++side) {
+          int seven = v, five = c, w = sides[side];
+          std::vector<std::pair<int, int>> undo;
+          for (int k = 0; k < max_glide; ++k) {
+            if (!interior(w, 6)) break;
+            const auto e2 = edge_faces(seven, w);
+            if (e2.size() != 2) break;
+            int d = opposite(e2[0], seven, w);
+            if (d == five) d = opposite(e2[1], seven, w);
+            if (!interior(d, 6) || !try_flip(seven, w, true)) break;
+            undo.emplace_back(five, d);  // now d is 7 and w is 5
+            if (improving_flip_around(d) || improving_flip_around(w)) {
+              done = true;
+              break;
+            }
+            const auto e3 = edge_faces(d, w);
+            if (e3.size() != 2) break;
+            int x = opposite(e3[0], d, w);
+            if (x == five) x = opposite(e3[1], d, w);
+            seven = d;
+            five = w;
+            w = x;
+          }
+          if (done) break;
+          for (auto it = undo.rbegin(); it != undo.rend(); ++it)
+            try_flip(it->first, it->second, true);
+        }
+      }
+      removed += done ? 1 : 0;
+    }
+    return removed;
   }
 
   // ---- Density correction (an addition; docs/particles.md) -------------------------------
@@ -1044,13 +1108,14 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
 
 int SpringNetwork::relax(const ImplicitSurface& surface) {
   Impl& m = *impl_;
-  int quiet = 0, n = 0, rounds = 0;
+  int quiet = 0, n = 0, rounds = 0, glide_rounds = 0;
   m.converged = false;
   // A surface frozen in time cannot tear: §4.4 answers a surface that splits while it moves.
   // On a static surface its tests fire at concave creases instead (a union of objects:
   // neighbouring particles on two objects have gradients > 90 deg apart across the crease)
   // and keep collapsing there, so relax() runs without topology change (restored after).
   const bool topology_change = m.o.topology_change;
+  const bool flips = m.o.flips;
   m.o.topology_change = false;
   // Isotropic remeshing rounds first (an addition, docs/particles.md): they bring the start
   // mesh near the spring equilibrium in a few sweeps, which explicit Euler needs hundreds of
@@ -1067,6 +1132,9 @@ int SpringNetwork::relax(const ImplicitSurface& surface) {
       window.resize(m.verts.size());
       for (std::size_t i = 0; i < m.verts.size(); ++i) window[i] = m.verts[i].p;
     }
+    // Freeze the flips after `flip_freeze` steps (decision 34): on scans the flips and the
+    // collapses of Rule 1 kept undoing each other somewhere (never converged in 3,000 steps).
+    if (m.o.flip_freeze > 0 && n == m.o.flip_freeze) m.o.flips = false;
     const StepReport r = step(surface);
     if (r.changed() || m.verts.size() != window.size()) {
       quiet = 0;
@@ -1080,7 +1148,13 @@ int SpringNetwork::relax(const ImplicitSurface& surface) {
       quiet = 0;
       continue;
     }
-    // Converged: correct a uniform compression or stretch (at most 8 rounds), else stop.
+    // Converged: cancel dislocations (decision 33), then correct a uniform compression or
+    // stretch (at most 8 rounds each), else stop.
+    if (m.o.flips && glide_rounds < 8 && m.remove_dislocations(m.o.max_glide) > 0) {
+      ++glide_rounds;
+      quiet = 0;
+      continue;
+    }
     const double s = m.mean_stretch();
     if (std::abs(s - 1.0) > m.o.density_tolerance && rounds < 8 && m.rebalance(s, surface) > 0) {
       ++rounds;
@@ -1092,6 +1166,7 @@ int SpringNetwork::relax(const ImplicitSurface& surface) {
     break;
   }
   m.o.topology_change = topology_change;
+  m.o.flips = flips;
   project(surface);
   return n;
 }
