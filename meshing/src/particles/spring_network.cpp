@@ -201,26 +201,43 @@ struct SpringNetwork::Impl {
     }
   }
 
+  // True if moving particle v to q turns none of its triangles that face along n (> 0)
+  // against n.
+  bool keeps_orientation(int v, const Vector3d& q, const Vector3d& n) const {
+    for (int f : verts[v].faces) {
+      const auto& t = faces[f].v;
+      std::array<Vector3d, 3> x{P(t[0]), P(t[1]), P(t[2])};
+      if ((x[1] - x[0]).cross(x[2] - x[0]).dot(n) <= 0.0) continue;  // already turned
+      for (int k = 0; k < 3; ++k)
+        if (t[k] == v) x[k] = q;
+      if ((x[1] - x[0]).cross(x[2] - x[0]).dot(n) <= 0.0) return false;
+    }
+    return true;
+  }
+
   // ---- Rule 1: midpoint collapse with the link condition ---------------------------------
   bool try_collapse(int a, int b) {
-    if (verts[a].boundary || verts[b].boundary) return false;  // Gap: borders are pinned
     const auto ef = edge_faces(a, b);
-    if (ef.size() != 2) return false;
-    const int c = opposite(ef[0], a, b), d = opposite(ef[1], a, b);
+    // Gap (decisions 19, 35): border particles are not merged with interior ones; a border
+    // edge (one face, both ends on the border) may collapse along the border.
+    const bool border_edge = ef.size() == 1 && verts[a].boundary && verts[b].boundary;
+    if (!border_edge && (verts[a].boundary || verts[b].boundary)) return false;
+    if (ef.size() != 2 && !border_edge) return false;
+    const int c = opposite(ef[0], a, b), d = border_edge ? -1 : opposite(ef[1], a, b);
     if (c == d) return false;
     const auto na = neighbors(a), nb = neighbors(b);
     std::vector<int> common;
     std::set_intersection(na.begin(), na.end(), nb.begin(), nb.end(), std::back_inserter(common));
     // Link condition (not in the report, needed for a manifold result): the common neighbours
-    // of a and b are exactly the two opposite vertices.
-    if (common.size() != 2) return false;
-    if (valence(c) <= 3 || valence(d) <= 3) return false;
-    if (na.size() + nb.size() - 4 < 3) return false;
+    // of a and b are exactly the two opposite vertices (the one, for a border edge).
+    if (common.size() != ef.size()) return false;
+    if (valence(c) <= 3 || (d >= 0 && valence(d) <= 3)) return false;
+    if (na.size() + nb.size() - 2 - ef.size() < 3) return false;  // merged valence
     const Vector3d m = 0.5 * (P(a) + P(b));
     // No face around a or b may flip or degenerate when its corner moves to m.
     for (int v : {a, b})
       for (int f : verts[v].faces) {
-        if (f == ef[0] || f == ef[1]) continue;
+        if (std::find(ef.begin(), ef.end(), f) != ef.end()) continue;
         auto t = faces[f].v;
         const Vector3d before = face_normal(t);
         for (int& x : t)
@@ -231,8 +248,7 @@ struct SpringNetwork::Impl {
         if (after.dot(before) <= 0.2 * before.norm() * after.norm()) return false;
         if (min_angle(q[0], q[1], q[2]) < 5.0 * std::numbers::pi / 180.0) return false;
       }
-    kill_face(ef[0]);
-    kill_face(ef[1]);
+    for (int f : ef) kill_face(f);
     for (int f : verts[b].faces) {
       for (int& x : faces[f].v)
         if (x == b) x = a;
@@ -1001,6 +1017,12 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
     const Vector3d d = m.P(ends[1]) - m.P(ends[0]);
     if (d.norm() > 0.0) border_dir.emplace(static_cast<int>(i), d.normalized());
   }
+  std::vector<char> near_border(m.verts.size(), 0);
+  for (std::size_t i = 0; i < m.verts.size(); ++i)
+    if (m.verts[i].alive && m.verts[i].boundary) {
+      near_border[i] = 1;
+      for (int x : m.neighbors(static_cast<int>(i))) near_border[x] = 1;
+    }
   // Eq. (8) and (11): constraint velocity with feedback phi; phi * dt = 1 (one Newton step).
   const double cap = o.max_step * m.R();
   for (std::size_t i = 0; i < m.verts.size(); ++i) {
@@ -1021,6 +1043,19 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
     }
     const double len = move.norm();
     if (len > cap) move *= cap / len;
+    // Gap decision 35: at a border (scan mode) a move may not turn one of the particle's
+    // triangles over (normal against the outward gradient); the border is free on one side,
+    // so nothing else stops a particle next to it from crossing a border edge.
+    if (g2 > 1e-20 && near_border[i] && !m.keeps_orientation(static_cast<int>(i), v.p + move, g)) {
+      Vector3d tangential = move - g.dot(move) / g2 * g;
+      const Vector3d normal_part = move - tangential;
+      move = Vector3d::Zero();
+      for (int h = 0; h < 4; ++h, tangential *= 0.5)
+        if (m.keeps_orientation(static_cast<int>(i), v.p + normal_part + tangential, g)) {
+          move = normal_part + tangential;
+          break;
+        }
+    }
     v.p += move;
   }
 

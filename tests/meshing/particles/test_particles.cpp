@@ -297,8 +297,9 @@ namespace scanmesh::particles {
 namespace {
 
 // Issue 7, scan mode on the full simulated head (built-in head scene and scanner, grid reduced
-// to 128 x 128 with the same height range; cleaned like `scanmesh clean`). Before decision 34
-// relax() hit its 3,000-iteration limit here (flips and Rule 1 collapses undoing each other).
+// to 128 x 128 with the same height range; cleaned like `scanmesh clean`). Before decisions
+// 34-35 relax() hit its 3,000-iteration limit here (flips and Rule 1 collapses undoing each
+// other; slivers at the borders turning over); measured now: ~430 iterations.
 TEST(ScanMode, SimulatedHeadConvergesToAManifoldMeshOnTheRangeSurface) {
   sim::ScannerConfig cfg = sim::builtin_head_scanner();
   cfg.n_phi = cfg.n_h = 128;
@@ -325,8 +326,9 @@ TEST(ScanMode, SimulatedHeadConvergesToAManifoldMeshOnTheRangeSurface) {
   }
   EXPECT_GE(defined, m.vertex_count() * 97 / 100);
   // Orientation against the grid surface's outward normal at each triangle's centroid.
-  // Measured: ~2.5 % of the triangles turned over, all but a few touching the band's borders
-  // (docs/particles.md, limitations: the issue wants none); asserted: < 3 %.
+  // Measured: 11 of 8,320 triangles turned over (0.13 %; 221, 2.5 %, before border edges
+  // could collapse, decision 35), all touching the band's borders (docs/particles.md,
+  // limitations: the issue wants none); asserted: < 0.5 %.
   std::size_t turned = 0, checked = 0;
   for (const auto& t : m.triangles) {
     const Vector3d c = (m.positions[t[0]] + m.positions[t[1]] + m.positions[t[2]]) / 3.0;
@@ -337,7 +339,7 @@ TEST(ScanMode, SimulatedHeadConvergesToAManifoldMeshOnTheRangeSurface) {
         (m.positions[t[1]] - m.positions[t[0]]).cross(m.positions[t[2]] - m.positions[t[0]]);
     turned += n.dot(f->gradient) <= 0.0 ? 1 : 0;
   }
-  EXPECT_LT(static_cast<double>(turned), 0.03 * static_cast<double>(checked));
+  EXPECT_LT(static_cast<double>(turned), 0.005 * static_cast<double>(checked));
   // Distance to the ground truth: the true surface along the scanner ray through the vertex.
   const sim::Scene scene = sim::builtin_head_scene();
   std::vector<double> err;
