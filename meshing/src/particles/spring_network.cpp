@@ -233,6 +233,9 @@ struct SpringNetwork::Impl {
     if (common.size() != ef.size()) return false;
     if (valence(c) <= 3 || (d >= 0 && valence(d) <= 3)) return false;
     if (na.size() + nb.size() - 2 - ef.size() < 3) return false;  // merged valence
+    // A border particle that swallowed its border neighbours again and again would collect a
+    // huge fan (and the time step shrinks with the largest valence): cap it at 6 (target 4).
+    if (border_edge && na.size() + nb.size() - 3 > 6) return false;
     const Vector3d m = 0.5 * (P(a) + P(b));
     // No face around a or b may flip or degenerate when its corner moves to m.
     for (int v : {a, b})

@@ -299,7 +299,7 @@ namespace {
 // Issue 7, scan mode on the full simulated head (built-in head scene and scanner, grid reduced
 // to 128 x 128 with the same height range; cleaned like `scanmesh clean`). Before decisions
 // 34-35 relax() hit its 3,000-iteration limit here (flips and Rule 1 collapses undoing each
-// other; slivers at the borders turning over); measured now: ~430 iterations.
+// other; slivers at the borders turning over); measured now: 275 iterations.
 TEST(ScanMode, SimulatedHeadConvergesToAManifoldMeshOnTheRangeSurface) {
   sim::ScannerConfig cfg = sim::builtin_head_scanner();
   cfg.n_phi = cfg.n_h = 128;
@@ -326,7 +326,7 @@ TEST(ScanMode, SimulatedHeadConvergesToAManifoldMeshOnTheRangeSurface) {
   }
   EXPECT_GE(defined, m.vertex_count() * 97 / 100);
   // Orientation against the grid surface's outward normal at each triangle's centroid.
-  // Measured: 11 of 8,320 triangles turned over (0.13 %; 221, 2.5 %, before border edges
+  // Measured: 7 of 8,296 triangles turned over (0.08 %; 221, 2.5 %, before border edges
   // could collapse, decision 35), all touching the band's borders (docs/particles.md,
   // limitations: the issue wants none); asserted: < 0.5 %.
   std::size_t turned = 0, checked = 0;
