@@ -201,26 +201,46 @@ struct SpringNetwork::Impl {
     }
   }
 
+  // True if moving particle v to q turns none of its triangles that face along n (> 0)
+  // against n.
+  bool keeps_orientation(int v, const Vector3d& q, const Vector3d& n) const {
+    for (int f : verts[v].faces) {
+      const auto& t = faces[f].v;
+      std::array<Vector3d, 3> x{P(t[0]), P(t[1]), P(t[2])};
+      if ((x[1] - x[0]).cross(x[2] - x[0]).dot(n) <= 0.0) continue;  // already turned
+      for (int k = 0; k < 3; ++k)
+        if (t[k] == v) x[k] = q;
+      if ((x[1] - x[0]).cross(x[2] - x[0]).dot(n) <= 0.0) return false;
+    }
+    return true;
+  }
+
   // ---- Rule 1: midpoint collapse with the link condition ---------------------------------
   bool try_collapse(int a, int b) {
-    if (verts[a].boundary || verts[b].boundary) return false;  // Gap: borders are pinned
     const auto ef = edge_faces(a, b);
-    if (ef.size() != 2) return false;
-    const int c = opposite(ef[0], a, b), d = opposite(ef[1], a, b);
+    // Gap (decisions 19, 35): border particles are not merged with interior ones; a border
+    // edge (one face, both ends on the border) may collapse along the border.
+    const bool border_edge = ef.size() == 1 && verts[a].boundary && verts[b].boundary;
+    if (!border_edge && (verts[a].boundary || verts[b].boundary)) return false;
+    if (ef.size() != 2 && !border_edge) return false;
+    const int c = opposite(ef[0], a, b), d = border_edge ? -1 : opposite(ef[1], a, b);
     if (c == d) return false;
     const auto na = neighbors(a), nb = neighbors(b);
     std::vector<int> common;
     std::set_intersection(na.begin(), na.end(), nb.begin(), nb.end(), std::back_inserter(common));
     // Link condition (not in the report, needed for a manifold result): the common neighbours
-    // of a and b are exactly the two opposite vertices.
-    if (common.size() != 2) return false;
-    if (valence(c) <= 3 || valence(d) <= 3) return false;
-    if (na.size() + nb.size() - 4 < 3) return false;
+    // of a and b are exactly the two opposite vertices (the one, for a border edge).
+    if (common.size() != ef.size()) return false;
+    if (valence(c) <= 3 || (d >= 0 && valence(d) <= 3)) return false;
+    if (na.size() + nb.size() - 2 - ef.size() < 3) return false;  // merged valence
+    // A border particle that swallowed its border neighbours again and again would collect a
+    // huge fan (and the time step shrinks with the largest valence): cap it at 6 (target 4).
+    if (border_edge && na.size() + nb.size() - 3 > 6) return false;
     const Vector3d m = 0.5 * (P(a) + P(b));
     // No face around a or b may flip or degenerate when its corner moves to m.
     for (int v : {a, b})
       for (int f : verts[v].faces) {
-        if (f == ef[0] || f == ef[1]) continue;
+        if (std::find(ef.begin(), ef.end(), f) != ef.end()) continue;
         auto t = faces[f].v;
         const Vector3d before = face_normal(t);
         for (int& x : t)
@@ -231,8 +251,7 @@ struct SpringNetwork::Impl {
         if (after.dot(before) <= 0.2 * before.norm() * after.norm()) return false;
         if (min_angle(q[0], q[1], q[2]) < 5.0 * std::numbers::pi / 180.0) return false;
       }
-    kill_face(ef[0]);
-    kill_face(ef[1]);
+    for (int f : ef) kill_face(f);
     for (int f : verts[b].faces) {
       for (int& x : faces[f].v)
         if (x == b) x = a;
@@ -286,7 +305,8 @@ struct SpringNetwork::Impl {
   }
 
   // ---- Edge flip towards valence 6 (not in the report; switchable) -----------------------
-  bool try_flip(int a, int b) {
+  // `glide`: skip the valence criterion (a dislocation glide step, remove_dislocations()).
+  bool try_flip(int a, int b, bool glide = false) {
     auto ef = edge_faces(a, b);
     if (ef.size() != 2) return false;
     if (!has_directed(ef[0], a, b)) std::swap(ef[0], ef[1]);
@@ -302,7 +322,7 @@ struct SpringNetwork::Impl {
         sq(va - target(a)) + sq(vb - target(b)) + sq(vc - target(c)) + sq(vd - target(d));
     const int after = sq(va - 1 - target(a)) + sq(vb - 1 - target(b)) + sq(vc + 1 - target(c)) +
                       sq(vd + 1 - target(d));
-    if (after >= before) return false;
+    if (after >= before && !glide) return false;
     const std::array<int, 3> t0{a, d, c}, t1{b, c, d};
     const Vector3d n0 = face_normal(t0), n1 = face_normal(t1);
     const Vector3d old_n =
@@ -325,6 +345,69 @@ struct SpringNetwork::Impl {
     springs[edge_key(c, d)] = make_spring(c, d, rest);
     mark(c, d), mark(a, c), mark(b, c), mark(a, d), mark(b, d);
     return true;
+  }
+
+  // ---- Dislocation removal (an addition; docs/particles.md, decision 33) -----------------
+  // An adjacent valence-7/valence-5 pair is a lattice dislocation: no flip that lowers the
+  // sum of squared valence deviations exists around it, so the greedy flips of decision 12
+  // leave it, and its spokes carry the largest strains of the mesh. A "glide" flip of the
+  // edge (seven, w), w the 6-valent common neighbour of the pair on one side, moves the pair
+  // one lattice step (7,5,6,6 -> 6,6,5,7) at no valence cost. Each pair is glided up to
+  // `max_glide` steps in each of its two directions; as soon as the moving 7 or 5 can be
+  // cancelled by an improving flip (it met a defect of opposite sign, e.g. an isolated 5) the
+  // path is kept, otherwise it is undone. Returns the number of cancelled pairs.
+  bool improving_flip_around(int x) {
+    if (!verts[x].alive) return false;
+    for (int y : neighbors(x))
+      if (try_flip(x, y)) return true;
+    return false;
+  }
+  int remove_dislocations(int max_glide) {
+    int removed = 0;
+    auto interior = [&](int v, int val) {
+      return verts[v].alive && !verts[v].boundary && fast_valence(v) == val;
+    };
+    for (std::size_t i = 0; i < verts.size(); ++i) {
+      const int v = static_cast<int>(i);
+      if (!interior(v, 7)) continue;
+      bool done = false;
+      for (int c : neighbors(v)) {
+        if (done || !interior(v, 7)) break;
+        if (!interior(c, 5)) continue;
+        const auto ef = edge_faces(v, c);
+        if (ef.size() != 2) continue;
+        const std::array<int, 2> sides{opposite(ef[0], v, c), opposite(ef[1], v, c)};
+        for (int side = 0; side < 2 && !done; ++side) {
+          int seven = v, five = c, w = sides[side];
+          std::vector<std::pair<int, int>> undo;
+          for (int k = 0; k < max_glide; ++k) {
+            if (!interior(w, 6)) break;
+            const auto e2 = edge_faces(seven, w);
+            if (e2.size() != 2) break;
+            int d = opposite(e2[0], seven, w);
+            if (d == five) d = opposite(e2[1], seven, w);
+            if (!interior(d, 6) || !try_flip(seven, w, true)) break;
+            undo.emplace_back(five, d);  // now d is 7 and w is 5
+            if (improving_flip_around(d) || improving_flip_around(w)) {
+              done = true;
+              break;
+            }
+            const auto e3 = edge_faces(d, w);
+            if (e3.size() != 2) break;
+            int x = opposite(e3[0], d, w);
+            if (x == five) x = opposite(e3[1], d, w);
+            seven = d;
+            five = w;
+            w = x;
+          }
+          if (done) break;
+          for (auto it = undo.rbegin(); it != undo.rend(); ++it)
+            try_flip(it->first, it->second, true);
+        }
+      }
+      removed += done ? 1 : 0;
+    }
+    return removed;
   }
 
   // ---- Density correction (an addition; docs/particles.md) -------------------------------
@@ -937,6 +1020,12 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
     const Vector3d d = m.P(ends[1]) - m.P(ends[0]);
     if (d.norm() > 0.0) border_dir.emplace(static_cast<int>(i), d.normalized());
   }
+  std::vector<char> near_border(m.verts.size(), 0);
+  for (std::size_t i = 0; i < m.verts.size(); ++i)
+    if (m.verts[i].alive && m.verts[i].boundary) {
+      near_border[i] = 1;
+      for (int x : m.neighbors(static_cast<int>(i))) near_border[x] = 1;
+    }
   // Eq. (8) and (11): constraint velocity with feedback phi; phi * dt = 1 (one Newton step).
   const double cap = o.max_step * m.R();
   for (std::size_t i = 0; i < m.verts.size(); ++i) {
@@ -957,6 +1046,19 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
     }
     const double len = move.norm();
     if (len > cap) move *= cap / len;
+    // Gap decision 35: at a border (scan mode) a move may not turn one of the particle's
+    // triangles over (normal against the outward gradient); the border is free on one side,
+    // so nothing else stops a particle next to it from crossing a border edge.
+    if (g2 > 1e-20 && near_border[i] && !m.keeps_orientation(static_cast<int>(i), v.p + move, g)) {
+      Vector3d tangential = move - g.dot(move) / g2 * g;
+      const Vector3d normal_part = move - tangential;
+      move = Vector3d::Zero();
+      for (int h = 0; h < 4; ++h, tangential *= 0.5)
+        if (m.keeps_orientation(static_cast<int>(i), v.p + normal_part + tangential, g)) {
+          move = normal_part + tangential;
+          break;
+        }
+    }
     v.p += move;
   }
 
@@ -1044,13 +1146,14 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
 
 int SpringNetwork::relax(const ImplicitSurface& surface) {
   Impl& m = *impl_;
-  int quiet = 0, n = 0, rounds = 0;
+  int quiet = 0, n = 0, rounds = 0, glide_rounds = 0;
   m.converged = false;
   // A surface frozen in time cannot tear: §4.4 answers a surface that splits while it moves.
   // On a static surface its tests fire at concave creases instead (a union of objects:
   // neighbouring particles on two objects have gradients > 90 deg apart across the crease)
   // and keep collapsing there, so relax() runs without topology change (restored after).
   const bool topology_change = m.o.topology_change;
+  const bool flips = m.o.flips;
   m.o.topology_change = false;
   // Isotropic remeshing rounds first (an addition, docs/particles.md): they bring the start
   // mesh near the spring equilibrium in a few sweeps, which explicit Euler needs hundreds of
@@ -1067,6 +1170,9 @@ int SpringNetwork::relax(const ImplicitSurface& surface) {
       window.resize(m.verts.size());
       for (std::size_t i = 0; i < m.verts.size(); ++i) window[i] = m.verts[i].p;
     }
+    // Freeze the flips after `flip_freeze` steps (decision 34): on scans the flips and the
+    // collapses of Rule 1 kept undoing each other somewhere (never converged in 3,000 steps).
+    if (m.o.flip_freeze > 0 && n == m.o.flip_freeze) m.o.flips = false;
     const StepReport r = step(surface);
     if (r.changed() || m.verts.size() != window.size()) {
       quiet = 0;
@@ -1080,7 +1186,13 @@ int SpringNetwork::relax(const ImplicitSurface& surface) {
       quiet = 0;
       continue;
     }
-    // Converged: correct a uniform compression or stretch (at most 8 rounds), else stop.
+    // Converged: cancel dislocations (decision 33), then correct a uniform compression or
+    // stretch (at most 8 rounds each), else stop.
+    if (m.o.flips && glide_rounds < 8 && m.remove_dislocations(m.o.max_glide) > 0) {
+      ++glide_rounds;
+      quiet = 0;
+      continue;
+    }
     const double s = m.mean_stretch();
     if (std::abs(s - 1.0) > m.o.density_tolerance && rounds < 8 && m.rebalance(s, surface) > 0) {
       ++rounds;
@@ -1092,6 +1204,7 @@ int SpringNetwork::relax(const ImplicitSurface& surface) {
     break;
   }
   m.o.topology_change = topology_change;
+  m.o.flips = flips;
   project(surface);
   return n;
 }

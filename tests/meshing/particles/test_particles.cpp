@@ -8,6 +8,7 @@
 #include <set>
 #include <unordered_map>
 
+#include "scanmesh/acquisition/grid_cleaning.h"
 #include "scanmesh/core/errors.h"
 #include "scanmesh/core/mesh_io.h"
 #include "scanmesh/meshing/mesh_topology.h"
@@ -287,6 +288,78 @@ TEST(ScanMode, SimulatedSphereGridGivesVerticesOnTheTrueSphere) {
   for (const auto& p : m.positions)
     worst = std::max(worst, std::abs((p - Vector3d(0, 0, 100)).norm() - 80.0));
   EXPECT_LT(worst, 0.05);
+}
+
+}  // namespace
+}  // namespace scanmesh::particles
+
+namespace scanmesh::particles {
+namespace {
+
+// Issue 7, scan mode on the full simulated head (built-in head scene and scanner, grid reduced
+// to 128 x 128 with the same height range; cleaned like `scanmesh clean`). Before decisions
+// 34-35 relax() hit its 3,000-iteration limit here (flips and Rule 1 collapses undoing each
+// other; slivers at the borders turning over); measured now: 275 iterations.
+TEST(ScanMode, SimulatedHeadConvergesToAManifoldMeshOnTheRangeSurface) {
+  sim::ScannerConfig cfg = sim::builtin_head_scanner();
+  cfg.n_phi = cfg.n_h = 128;
+  cfg.dh_mm *= 4.0;
+  sim::SimulatedScan scan = sim::simulate_scan(sim::builtin_head_scene(), cfg);
+  clean_grid(scan.grid);
+  const ScanSurface surface(scan.grid);
+  const ScanImplicitSurface implicit(surface);
+  const ParticleMeshResult r = particle_mesh(implicit, {.edge_length = 4.0});
+  EXPECT_TRUE(r.converged) << r.iterations << " iterations";
+  const Mesh& m = r.mesh;
+  ASSERT_GT(m.vertex_count(), 2000u);
+  const TopologyStats st = topology_stats(m);
+  EXPECT_EQ(st.nonmanifold_edges, 0u);
+  EXPECT_EQ(st.inconsistent_edges, 0u);
+  // Every vertex where the range surface is defined lies on it (first-order distance); border
+  // particles can sit where the bicubic patch just ends (F undefined).
+  std::size_t defined = 0;
+  for (const auto& p : m.positions) {
+    const auto f = implicit.evaluate(p);
+    if (!f) continue;
+    ++defined;
+    EXPECT_LT(std::abs(f->value) / f->gradient.norm(), 1e-6);
+  }
+  EXPECT_GE(defined, m.vertex_count() * 97 / 100);
+  // Orientation against the grid surface's outward normal at each triangle's centroid.
+  // Measured: 7 of 8,296 triangles turned over (0.08 %; 221, 2.5 %, before border edges
+  // could collapse, decision 35), all touching the band's borders (docs/particles.md,
+  // limitations: the issue wants none); asserted: < 0.5 %.
+  std::size_t turned = 0, checked = 0;
+  for (const auto& t : m.triangles) {
+    const Vector3d c = (m.positions[t[0]] + m.positions[t[1]] + m.positions[t[2]]) / 3.0;
+    const auto f = implicit.evaluate(c);
+    if (!f) continue;
+    ++checked;
+    const Vector3d n =
+        (m.positions[t[1]] - m.positions[t[0]]).cross(m.positions[t[2]] - m.positions[t[0]]);
+    turned += n.dot(f->gradient) <= 0.0 ? 1 : 0;
+  }
+  EXPECT_LT(static_cast<double>(turned), 0.005 * static_cast<double>(checked));
+  // Distance to the ground truth: the true surface along the scanner ray through the vertex.
+  const sim::Scene scene = sim::builtin_head_scene();
+  std::vector<double> err;
+  for (const auto& p : m.positions) {
+    const Vector3d dir = -Vector3d(p.x(), p.y(), 0.0).normalized();
+    const Vector3d origin =
+        Vector3d(p.x(), p.y(), 0.0).normalized() * cfg.radius_mm + Vector3d(0, 0, p.z());
+    const auto hit = scene.intersect(origin, dir, 0.0, 2.0 * cfg.radius_mm);
+    if (!hit) continue;
+    err.push_back(std::abs((origin + hit->t * dir - p).norm()));
+  }
+  ASSERT_GT(err.size(), m.vertex_count() * 9 / 10);
+  std::sort(err.begin(), err.end());
+  const double median = err[err.size() / 2], p95 = err[err.size() * 95 / 100];
+  std::printf(
+      "head: %zu vertices, %d iterations, turned %zu / %zu, truth error median %.3f "
+      "p95 %.3f max %.3f mm\n",
+      m.vertex_count(), r.iterations, turned, checked, median, p95, err.back());
+  EXPECT_LT(median, 0.5);
+  EXPECT_LT(p95, 3.0);
 }
 
 }  // namespace

@@ -62,6 +62,12 @@ struct ParticleOptions {
   //! relax(): after convergence, a mean stretch farther than this from 1 is corrected by
   //! collapsing or splitting springs (docs/particles.md, decision 13).
   double density_tolerance = 0.03;
+  //! relax(): after convergence, valence-5/7 pairs (dislocations) are glided by flips up to
+  //! this many steps to cancel against other defects (docs/particles.md, decision 33; 0: off).
+  int max_glide = 0;
+  //! relax(): flips stop after this many spring iterations so flip/collapse cycles cannot
+  //! keep it from converging (docs/particles.md, decision 34; 0: never).
+  int flip_freeze = 500;
   std::uint64_t seed = 1;  //!< reserved (CLI --seed); the spring network uses no randomness
 };
 
