@@ -116,15 +116,6 @@ int run_devices(const DevicesArgs& args) {
   return kSuccess;
 }
 
-std::pair<int, int> parse_size(const std::string& s) {
-  int w = 0, h = 0;
-  char tail = 0;
-  if (std::sscanf(s.c_str(), "%dx%d%c", &w, &h, &tail) != 2 || w < 8 || h < 8 || w > 8192 ||
-      h > 8192 || w % 2 != 0)
-    throw InvalidInputError("--size '" + s + "' must be WIDTHxHEIGHT (even width, 8..8192)");
-  return {w, h};
-}
-
 std::unique_ptr<drivers::Transport> open_board_transport(const std::string& board, int baud) {
   if (board.starts_with("/")) return drivers::open_serial_transport(board, baud);
   drivers::UsbSerialOptions o = drivers::parse_usb_board_spec(board);
@@ -150,7 +141,7 @@ int run_scan(const ScanArgs& a) {
   if (a.lasers < 0 || a.lasers > 2) throw InvalidInputError("--lasers must be 0, 1 or 2");
   if (!(a.time_scale > 0) || a.time_scale > 1)
     throw InvalidInputError("--time-scale must be in (0, 1]");
-  const auto [width, height] = parse_size(a.size);
+  const auto [width, height] = parse_frame_size(a.size);
   const drivers::PixelFormat format =
       drivers::parse_pixel_format(a.format.empty() ? (a.sim ? "rgb24" : "yuyv") : a.format);
   if (a.storage != "png" && a.storage != "mjpeg")

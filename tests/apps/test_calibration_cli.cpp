@@ -55,19 +55,8 @@ fs::path scratch(const std::string& name) {
 }
 
 // The simulated rig of `scan --sim` at 640 x 480: the built-in rig, intrinsics scaled with the
-// sensor (apps/src/calibration_capture.cpp, scaled_ciclop_rig).
-sim::RigConfig truth_rig() {
-  sim::RigConfig rig = sim::builtin_ciclop_rig();
-  const double sx = static_cast<double>(kWidth) / rig.width;
-  const double sy = static_cast<double>(kHeight) / rig.height;
-  rig.intrinsics.fx *= sx;
-  rig.intrinsics.cx = (rig.intrinsics.cx + 0.5) * sx - 0.5;
-  rig.intrinsics.fy *= sy;
-  rig.intrinsics.cy = (rig.intrinsics.cy + 0.5) * sy - 0.5;
-  rig.width = kWidth;
-  rig.height = kHeight;
-  return rig;
-}
+// sensor (sim::rig_at_size, which scan --sim renders with).
+sim::RigConfig truth_rig() { return sim::rig_at_size(sim::builtin_ciclop_rig(), kWidth, kHeight); }
 
 class CalibrationCli : public ::testing::Test {
  protected:
@@ -96,114 +85,121 @@ fs::path* CalibrationCli::session_ = nullptr;
 fs::path* CalibrationCli::yaml_ = nullptr;
 RunResult* CalibrationCli::calibrate_ = nullptr;
 
-TEST_F(CalibrationCli, SessionIsMarkedAndCarriesThePattern) {
-  const SessionReader reader(*session_);
-  ASSERT_TRUE(reader.complete());
-  const auto& h = reader.manifest().header;
-  ASSERT_TRUE(h.calibration.has_value());
-  EXPECT_EQ(h.calibration->pattern.corner_cols, 11);
-  EXPECT_EQ(h.calibration->pattern.corner_rows, 6);
-  EXPECT_EQ(h.calibration->pattern.square_mm, 13.0);
-  EXPECT_EQ(h.calibration->poses.size(), 3u + 8u);
-  EXPECT_EQ(h.step_count, 3u * 11u + 8u);
-  // Every step was recorded at its planned angle.
-  for (std::size_t i = 0; i < reader.step_count(); ++i)
-    EXPECT_NEAR(reader.manifest().steps[i].angle_rad, h.step_angle(i), 0.2 / kDeg) << i;
-  // reconstruct refuses a calibration session.
-  const RunResult r = run("reconstruct " + session_->string() + " --calib " + yaml_->string() +
-                          " --out " + (session_->parent_path() / "x.smg").string());
-  EXPECT_EQ(r.exit_code, 4) << r.output;
-  EXPECT_NE(r.output.find("calibration session"), std::string::npos) << r.output;
-}
-
-TEST_F(CalibrationCli, CalibrationFromTheRecordedSessionMatchesTheRig) {
-  ASSERT_EQ(calibrate_->exit_code, 0) << calibrate_->output;
-  std::printf("%s", calibrate_->output.c_str());
-  const Calibration c = Calibration::read_yaml(*yaml_);
-  const sim::RigConfig rig = truth_rig();
-  const sim::Scene unused = sim::Scene::from_yaml_text(
-      "objects:\n  - {type: sphere, name: unused, center: [0, 0, -1000], radius: 1}\n", "unused");
-  const sim::TurntableCamera camera(unused, rig);
-  const auto& t = rig.intrinsics;
-  std::printf("  fx %.3f (true %.3f)  fy %.3f (%.3f)  cx %.3f (%.3f)  cy %.3f (%.3f)\n",
-              c.camera.fx, t.fx, c.camera.fy, t.fy, c.camera.cx, t.cx, c.camera.cy, t.cy);
-  EXPECT_LT(std::abs(c.camera.fx / t.fx - 1.0), 0.002);
-  EXPECT_LT(std::abs(c.camera.fy / t.fy - 1.0), 0.002);
-  EXPECT_LT(std::abs(c.camera.cx - t.cx), 1.0);
-  EXPECT_LT(std::abs(c.camera.cy - t.cy), 1.0);
-  const Eigen::Isometry3d cam_from_rig = camera.camera_from_rig();
-  ASSERT_EQ(c.lasers.size(), 2u);
-  for (int k = 0; k < 2; ++k) {
-    const Eigen::Vector3d n_true = cam_from_rig.linear() * rig.lasers[k].normal;
-    const double angle = std::acos(std::min(1.0, std::abs(n_true.dot(c.lasers[k].normal)))) * kDeg;
-    std::printf("  laser %d: normal off by %.4f deg (sigma %.4f)\n", k, angle,
-                c.uncertainty.laser_normal_deg[k]);
-    EXPECT_LT(angle, 0.1);
-  }
-  const Eigen::Vector3d a_true = cam_from_rig.linear() * Eigen::Vector3d::UnitZ();
-  const double axis_angle = std::acos(std::min(1.0, a_true.dot(c.axis_direction))) * kDeg;
-  double axis_off = 0;
-  for (double z : {0.0, 100.0, 200.0}) {
-    const Eigen::Vector3d q = cam_from_rig * Eigen::Vector3d(0, 0, z);
-    const Eigen::Vector3d d = q - c.axis_origin_mm;
-    axis_off = std::max(axis_off, (d - d.dot(c.axis_direction) * c.axis_direction).norm());
-  }
-  std::printf("  axis: direction off by %.4f deg (sigma %.4f), line off by %.4f mm (sigma %.4f)\n",
-              axis_angle, c.uncertainty.axis_direction_deg, axis_off, c.uncertainty.axis_point_mm);
-  // Half the built-in resolution: one pixel is 0.56 mm at the axis, twice the 1280 x 960 rig's,
-  // and the leaning boards at +-70 degrees are too small to detect, so the fit's own sigma of the
-  // axis line is ~0.28 mm here (0.08 mm at full resolution, where test_calibration checks the
-  // issue's 0.1 mm). Asserted: the axis within 0.5 mm and within 3 sigma of its own uncertainty
-  // (the reported uncertainty is honest), the normals and axis direction within 0.1 degrees.
-  EXPECT_LT(axis_angle, 0.1);
-  EXPECT_LT(axis_off, 0.5);
-  EXPECT_LT(axis_off, 3.0 * c.uncertainty.axis_point_mm);
-}
-
-TEST_F(CalibrationCli, BadOrMissingSessionsAreBadFilesNamed) {
-  const fs::path dir = session_->parent_path();
-  const std::string out = " --out " + (dir / "bad.yaml").string();
-  // No such folder.
-  RunResult r = run("calibrate " + (dir / "missing").string() + out);
-  EXPECT_EQ(r.exit_code, 4) << r.output;
-  EXPECT_NE(r.output.find("missing"), std::string::npos) << r.output;
-  // A scan session is not a calibration session.
-  const fs::path scan = dir / "scan";
-  ASSERT_EQ(run("scan --sim --steps 2 --size 32x24 --time-scale 0.01 --settle 0.01 --out " +
-                scan.string())
-                .exit_code,
-            0);
-  r = run("calibrate " + scan.string() + out);
-  EXPECT_EQ(r.exit_code, 4) << r.output;
-  EXPECT_NE(r.output.find("session.json"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("not a calibration session"), std::string::npos) << r.output;
-  // A damaged pattern block.
-  const fs::path broken = dir / "broken";
-  fs::create_directories(broken);
-  for (const auto& e : fs::directory_iterator(*session_))
-    if (e.is_regular_file()) fs::copy_file(e.path(), broken / e.path().filename());
-  fs::create_directory_symlink(fs::absolute(*session_ / "frames"), broken / "frames");
+// One test for the expensive scan + calibrate set-up: ctest runs each test in its own process, so
+// three tests paid for it three times (~80 s each).
+TEST_F(CalibrationCli, RecordedSessionCalibratesAndBadSessionsAreNamed) {
   {
-    std::ifstream in(broken / "session.json");
-    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    const auto pos = text.find("\"square_mm\"");
-    ASSERT_NE(pos, std::string::npos);
-    text.replace(pos, 11, "\"square_cm\"");
-    std::ofstream(broken / "session.json", std::ios::trunc) << text;  // non-atomic: test input
+    SCOPED_TRACE("SessionIsMarkedAndCarriesThePattern");
+    const SessionReader reader(*session_);
+    ASSERT_TRUE(reader.complete());
+    const auto& h = reader.manifest().header;
+    ASSERT_TRUE(h.calibration.has_value());
+    EXPECT_EQ(h.calibration->pattern.corner_cols, 11);
+    EXPECT_EQ(h.calibration->pattern.corner_rows, 6);
+    EXPECT_EQ(h.calibration->pattern.square_mm, 13.0);
+    EXPECT_EQ(h.calibration->poses.size(), 3u + 8u);
+    EXPECT_EQ(h.step_count, 3u * 11u + 8u);
+    // Every step was recorded at its planned angle.
+    for (std::size_t i = 0; i < reader.step_count(); ++i)
+      EXPECT_NEAR(reader.manifest().steps[i].angle_rad, h.step_angle(i), 0.2 / kDeg) << i;
+    // reconstruct refuses a calibration session.
+    const RunResult r = run("reconstruct " + session_->string() + " --calib " + yaml_->string() +
+                            " --out " + (session_->parent_path() / "x.smg").string());
+    EXPECT_EQ(r.exit_code, 4) << r.output;
+    EXPECT_NE(r.output.find("calibration session"), std::string::npos) << r.output;
   }
-  r = run("calibrate " + broken.string() + out);
-  EXPECT_EQ(r.exit_code, 4) << r.output;
-  EXPECT_NE(r.output.find("session.json"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("square_mm"), std::string::npos) << r.output;
-  // A damaged frame names the frame file.
-  const fs::path damaged = dir / "damaged";
-  fs::copy(*session_, damaged, fs::copy_options::recursive);
-  const fs::path frame = damaged / "frames" / "000005_off.png";
-  fs::resize_file(frame, fs::file_size(frame) / 2);
-  r = run("calibrate " + damaged.string() + out);
-  EXPECT_EQ(r.exit_code, 4) << r.output;
-  EXPECT_NE(r.output.find("000005_off.png"), std::string::npos) << r.output;
-  EXPECT_FALSE(fs::exists(dir / "bad.yaml"));
+  {
+    SCOPED_TRACE("CalibrationFromTheRecordedSessionMatchesTheRig");
+    ASSERT_EQ(calibrate_->exit_code, 0) << calibrate_->output;
+    std::printf("%s", calibrate_->output.c_str());
+    const Calibration c = Calibration::read_yaml(*yaml_);
+    const sim::RigConfig rig = truth_rig();
+    const sim::Scene unused = sim::Scene::from_yaml_text(
+        "objects:\n  - {type: sphere, name: unused, center: [0, 0, -1000], radius: 1}\n", "unused");
+    const sim::TurntableCamera camera(unused, rig);
+    const auto& t = rig.intrinsics;
+    std::printf("  fx %.3f (true %.3f)  fy %.3f (%.3f)  cx %.3f (%.3f)  cy %.3f (%.3f)\n",
+                c.camera.fx, t.fx, c.camera.fy, t.fy, c.camera.cx, t.cx, c.camera.cy, t.cy);
+    EXPECT_LT(std::abs(c.camera.fx / t.fx - 1.0), 0.002);
+    EXPECT_LT(std::abs(c.camera.fy / t.fy - 1.0), 0.002);
+    EXPECT_LT(std::abs(c.camera.cx - t.cx), 1.0);
+    EXPECT_LT(std::abs(c.camera.cy - t.cy), 1.0);
+    const Eigen::Isometry3d cam_from_rig = camera.camera_from_rig();
+    ASSERT_EQ(c.lasers.size(), 2u);
+    for (int k = 0; k < 2; ++k) {
+      const Eigen::Vector3d n_true = cam_from_rig.linear() * rig.lasers[k].normal;
+      const double angle =
+          std::acos(std::min(1.0, std::abs(n_true.dot(c.lasers[k].normal)))) * kDeg;
+      std::printf("  laser %d: normal off by %.4f deg (sigma %.4f)\n", k, angle,
+                  c.uncertainty.laser_normal_deg[k]);
+      EXPECT_LT(angle, 0.1);
+    }
+    const Eigen::Vector3d a_true = cam_from_rig.linear() * Eigen::Vector3d::UnitZ();
+    const double axis_angle = std::acos(std::min(1.0, a_true.dot(c.axis_direction))) * kDeg;
+    double axis_off = 0;
+    for (double z : {0.0, 100.0, 200.0}) {
+      const Eigen::Vector3d q = cam_from_rig * Eigen::Vector3d(0, 0, z);
+      const Eigen::Vector3d d = q - c.axis_origin_mm;
+      axis_off = std::max(axis_off, (d - d.dot(c.axis_direction) * c.axis_direction).norm());
+    }
+    std::printf(
+        "  axis: direction off by %.4f deg (sigma %.4f), line off by %.4f mm (sigma %.4f)\n",
+        axis_angle, c.uncertainty.axis_direction_deg, axis_off, c.uncertainty.axis_point_mm);
+    // Half the built-in resolution: one pixel is 0.56 mm at the axis, twice the 1280 x 960 rig's,
+    // and the leaning boards at +-70 degrees are too small to detect, so the fit's own sigma of the
+    // axis line is ~0.28 mm here (0.08 mm at full resolution, where test_calibration checks the
+    // issue's 0.1 mm). Asserted: the axis within 0.5 mm and within 3 sigma of its own uncertainty
+    // (the reported uncertainty is honest), the normals and axis direction within 0.1 degrees.
+    EXPECT_LT(axis_angle, 0.1);
+    EXPECT_LT(axis_off, 0.5);
+    EXPECT_LT(axis_off, 3.0 * c.uncertainty.axis_point_mm);
+  }
+  {
+    SCOPED_TRACE("BadOrMissingSessionsAreBadFilesNamed");
+    const fs::path dir = session_->parent_path();
+    const std::string out = " --out " + (dir / "bad.yaml").string();
+    // No such folder.
+    RunResult r = run("calibrate " + (dir / "missing").string() + out);
+    EXPECT_EQ(r.exit_code, 4) << r.output;
+    EXPECT_NE(r.output.find("missing"), std::string::npos) << r.output;
+    // A scan session is not a calibration session.
+    const fs::path scan = dir / "scan";
+    ASSERT_EQ(run("scan --sim --steps 2 --size 32x24 --time-scale 0.01 --settle 0.01 --out " +
+                  scan.string())
+                  .exit_code,
+              0);
+    r = run("calibrate " + scan.string() + out);
+    EXPECT_EQ(r.exit_code, 4) << r.output;
+    EXPECT_NE(r.output.find("session.json"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("not a calibration session"), std::string::npos) << r.output;
+    // A damaged pattern block.
+    const fs::path broken = dir / "broken";
+    fs::create_directories(broken);
+    for (const auto& e : fs::directory_iterator(*session_))
+      if (e.is_regular_file()) fs::copy_file(e.path(), broken / e.path().filename());
+    fs::create_directory_symlink(fs::absolute(*session_ / "frames"), broken / "frames");
+    {
+      std::ifstream in(broken / "session.json");
+      std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      const auto pos = text.find("\"square_mm\"");
+      ASSERT_NE(pos, std::string::npos);
+      text.replace(pos, 11, "\"square_cm\"");
+      std::ofstream(broken / "session.json", std::ios::trunc) << text;  // non-atomic: test input
+    }
+    r = run("calibrate " + broken.string() + out);
+    EXPECT_EQ(r.exit_code, 4) << r.output;
+    EXPECT_NE(r.output.find("session.json"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("square_mm"), std::string::npos) << r.output;
+    // A damaged frame names the frame file.
+    const fs::path damaged = dir / "damaged";
+    fs::copy(*session_, damaged, fs::copy_options::recursive);
+    const fs::path frame = damaged / "frames" / "000005_off.png";
+    fs::resize_file(frame, fs::file_size(frame) / 2);
+    r = run("calibrate " + damaged.string() + out);
+    EXPECT_EQ(r.exit_code, 4) << r.output;
+    EXPECT_NE(r.output.find("000005_off.png"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir / "bad.yaml"));
+  }
 }
 
 TEST(CalibrationCliResume, InterruptedPoseStartsOverAndGivesTheSameSession) {

@@ -4,15 +4,30 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <unordered_set>
+#include <utility>
 #include <vector>
 
 #include "scanmesh/meshing/aft/animesh.h"
 #include "scanmesh/reconstruction/scan_surface.h"
 
 namespace scanmesh::aft::detail {
+
+//! Key of the undirected edge {a, b}.
+inline std::uint64_t ukey(int a, int b) {
+  if (a > b) std::swap(a, b);
+  return (static_cast<std::uint64_t>(a) << 32) | static_cast<std::uint32_t>(b);
+}
+
+//! The angle at p of the triangle (p, q, r), in radians.
+inline double angle_at(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
+                       const Eigen::Vector3d& r) {
+  const Eigen::Vector3d u = q - p, v = r - p;
+  return std::atan2(u.cross(v).norm(), u.dot(v));
+}
 
 //! Every node of the animation mesh: (phi, h) and its point and normal on the surface.
 struct NodeStore {

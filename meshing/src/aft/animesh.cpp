@@ -14,18 +14,10 @@ namespace scanmesh::aft {
 
 using Eigen::Vector2d;
 using Eigen::Vector3d;
+using detail::angle_at;
+using detail::ukey;
 
 namespace {
-
-std::uint64_t ukey(int a, int b) {
-  if (a > b) std::swap(a, b);
-  return (static_cast<std::uint64_t>(a) << 32) | static_cast<std::uint32_t>(b);
-}
-
-double angle_at(const Vector3d& p, const Vector3d& q, const Vector3d& r) {
-  const Vector3d u = q - p, v = r - p;
-  return std::atan2(u.cross(v).norm(), u.dot(v));
-}
 
 double tri_min_angle(const Vector3d& a, const Vector3d& b, const Vector3d& c) {
   return std::min({angle_at(a, b, c), angle_at(b, c, a), angle_at(c, a, b)});

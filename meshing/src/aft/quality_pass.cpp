@@ -22,16 +22,6 @@ using Eigen::Vector3d;
 
 namespace {
 
-std::uint64_t ukey(int a, int b) {
-  if (a > b) std::swap(a, b);
-  return (static_cast<std::uint64_t>(a) << 32) | static_cast<std::uint32_t>(b);
-}
-
-double angle_at(const Vector3d& p, const Vector3d& q, const Vector3d& r) {
-  const Vector3d u = q - p, v = r - p;
-  return std::atan2(u.cross(v).norm(), u.dot(v));
-}
-
 constexpr std::array<int, 3> kDead{-1, -1, -1};
 
 class Repair {
