@@ -269,11 +269,9 @@ Calibration Calibration::from_yaml_text(const std::string& text, const std::stri
 }
 
 Calibration Calibration::read_yaml(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError("cannot open calibration file " + path.string());
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return from_yaml_text(ss.str(), path.string());
+  // Whole-file read through core (names the file and the OS reason, refuses a directory).
+  const std::vector<std::uint8_t> bytes = read_file_bytes(path);
+  return from_yaml_text(std::string(bytes.begin(), bytes.end()), path.string());
 }
 
 void Calibration::write_yaml(const std::filesystem::path& path) const {

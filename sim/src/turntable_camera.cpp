@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "random.h"
+#include "scanmesh/core/atomic_file.h"
 #include "scanmesh/core/errors.h"
 #include "yaml_util.h"
 
@@ -212,11 +213,9 @@ RigConfig RigConfig::from_yaml_text(const std::string& text, const std::string& 
 }
 
 RigConfig RigConfig::from_yaml_file(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError("cannot open rig file " + path.string());
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return from_yaml_text(ss.str(), path.string());
+  // Whole-file read through core (names the file and the OS reason, refuses a directory).
+  const std::vector<std::uint8_t> bytes = read_file_bytes(path);
+  return from_yaml_text(std::string(bytes.begin(), bytes.end()), path.string());
 }
 
 std::string RigConfig::to_yaml() const {
