@@ -40,6 +40,10 @@ struct RemeshArgs {
   double tip_angle = 120.0;
   bool queue = false;
   bool allow_local_intersections = false;
+  int polish_rounds = 3;
+  double polish_angle = 30.0;
+  int polish_flip_cost = 2;
+  bool write_prepared = false;
 };
 
 int run_remesh(const RemeshArgs& a) {
@@ -98,6 +102,9 @@ int run_remesh(const RemeshArgs& a) {
   o.prevent_intersections = !a.allow_local_intersections;
   o.skeleton.kink_reach_mm = a.kink_reach;
   o.theta_glatt_deg = a.theta_glatt;
+  o.polish_rounds = a.polish_rounds;
+  o.polish_angle_deg = a.polish_angle;
+  o.polish_flip_cost = a.polish_flip_cost;
   if (a.features == "auto") {
     o.skeleton.sharp_angle_deg = a.sharp_deg;
   } else if (!a.features.empty()) {
@@ -112,6 +119,7 @@ int run_remesh(const RemeshArgs& a) {
   std::filesystem::create_directories(a.out);
   const std::filesystem::path dir(a.out);
   write_ply(dir / "mesh.ply", r.mesh);
+  if (a.write_prepared) write_ply(dir / "prepared.ply", input);
   const RemeshQuality q = evaluate_remesh(input, r, !a.no_intersections);
   const RemeshStats& s = r.stats;
   std::ostringstream json;
@@ -130,6 +138,10 @@ int run_remesh(const RemeshArgs& a) {
        << ", \"skeleton_splits\": " << s.skeleton_splits
        << ", \"skeleton_collapses\": " << s.skeleton_collapses
        << ", \"intersecting_faces_before_repair\": " << s.intersecting_faces_before_repair
+       << ", \"repair_splits\": " << s.repair_splits
+       << ", \"polish_bad_before\": " << s.polish_bad_before
+       << ", \"polish_bad_after\": " << s.polish_bad_after
+       << ", \"polish_moves\": " << s.polish_moves << ", \"polish_flips\": " << s.polish_flips
        << ", \"seconds_setup\": " << s.seconds_setup << ", \"seconds_adapt\": " << s.seconds_adapt
        << ", \"seconds_count\": " << s.seconds_count
        << ", \"seconds_regularize\": " << s.seconds_regularize
@@ -150,7 +162,10 @@ int run_remesh(const RemeshArgs& a) {
             << q.bad_at_boundary << ", other skeleton " << q.bad_at_skeleton << ", interior "
             << q.bad_interior << "\n"
             << "  Hausdorff " << q.hausdorff << " mm (" << 100 * q.hausdorff / q.bbox_diagonal
-            << " % of the diagonal), mean distance " << q.mean_distance << " mm";
+            << " % of the diagonal), mean distance " << q.mean_distance << " mm\n"
+            << "  polish: faces < " << a.polish_angle << " deg " << s.polish_bad_before << " -> "
+            << s.polish_bad_after << " (" << s.polish_moves << " moves, " << s.polish_flips
+            << " flips); repair splits " << s.repair_splits;
   if (q.self_intersections_checked)
     std::cout << ", self-intersections " << q.self_intersections << " (faces cutting another "
               << "before the repair pass: " << s.intersecting_faces_before_repair << ")";
@@ -204,6 +219,14 @@ void register_remesh_commands(CLI::App& app, CommandList& commands) {
   c->add_option("--tip-angle", args->tip_angle,
                 "With --remove-spikes: border tips sharper than this (deg) over one target edge "
                 "length are removed");
+  c->add_option("--polish-rounds", args->polish_rounds,
+                 "Angle polish rounds after the smoothing (0: off; docs/remeshing.md)");
+  c->add_option("--polish-angle", args->polish_angle,
+                 "The polish works on faces whose min angle is below this (deg)");
+  c->add_option("--polish-flip-cost", args->polish_flip_cost,
+                 "Largest valence cost (rise of R) of a polish flip; 4 = a flip in a regular patch");
+  c->add_flag("--write-prepared", args->write_prepared,
+              "Also write the cleaned-up input the remesher saw (DIR/prepared.ply)");
   c->add_option("--out", args->out, "Output directory")->required();
   commands.push_back({c, [args] { return run_remesh(*args); }});
 }

@@ -503,9 +503,28 @@ Vector2d param_to_pixel(const ScanSurface& s, const Vector2d& p) {
 void validate_lines(const LineSet& set, const ScanSurface& surface) {
   for (const AnimationLine& line : set.lines) {
     const std::string who = "line '" + line.id + "' (" + line.source + ")";
+    auto leaves_at = [&](const Vector2d& p) {
+      std::ostringstream os;
+      os.precision(1);
+      os << std::fixed << who << " leaves the scanned area at pixel (" << p.x() << ", " << p.y()
+         << ")";
+      throw FileFormatError(set.file, os.str());
+    };
     const std::size_t n = line.pixels.size();
     const std::size_t pieces = line.closed ? n : n - 1;
     double length_px = 0;
+    // Lines may run past the texture's right edge (across the phi seam), but not by turns: a
+    // far-off x would wrap round many times and make the sampling below loop for ever.
+    const double x_limit = 4.0 * surface.n_phi();
+    for (const Vector2d& p : line.pixels)
+      if (!(std::abs(p.x()) <= x_limit)) {
+        std::ostringstream os;
+        os << who << " has a point at x = " << p.x() << ", more than " << x_limit
+           << " pixels from the texture (lines may cross its phi seam, not wind round)";
+        throw FileFormatError(set.file, os.str());
+      } else if (!(p.y() >= 0.5 && p.y() <= surface.n_h() - 0.5)) {
+        leaves_at(p);
+      }
     for (std::size_t k = 0; k < pieces; ++k) {
       const Vector2d a = line.pixels[k], b = line.pixels[(k + 1) % n];
       length_px += (b - a).norm();
@@ -513,13 +532,8 @@ void validate_lines(const LineSet& set, const ScanSurface& surface) {
       for (int s = 0; s <= steps; ++s) {
         const Vector2d p = a + (b - a) * (static_cast<double>(s) / steps);
         const Vector2d q = pixel_to_param(surface, p);
-        if (p.y() < 0.5 || p.y() > surface.n_h() - 0.5 || !surface.defined(q.x(), q.y())) {
-          std::ostringstream os;
-          os.precision(1);
-          os << std::fixed << who << " leaves the scanned area at pixel (" << p.x() << ", " << p.y()
-             << ")";
-          throw FileFormatError(set.file, os.str());
-        }
+        if (p.y() < 0.5 || p.y() > surface.n_h() - 0.5 || !surface.defined(q.x(), q.y()))
+          leaves_at(p);
       }
     }
     if (length_px < 2.0) throw FileFormatError(set.file, who + " is too short (under 2 pixels)");

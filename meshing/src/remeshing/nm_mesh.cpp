@@ -3,6 +3,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <string>
 
 #include "scanmesh/core/errors.h"
@@ -107,6 +108,18 @@ std::vector<int> NmMesh::neighbours(int v) const {
     for (int c : tri[f])
       if (c != v && std::find(out.begin(), out.end(), c) == out.end()) out.push_back(c);
   return out;
+}
+
+int NmMesh::valence(int v) const {
+  std::array<int, 32> seen;
+  int n = 0;
+  for (int f : vfaces[v])
+    for (int c : tri[f]) {
+      if (c == v || std::find(seen.begin(), seen.begin() + n, c) != seen.begin() + n) continue;
+      if (n == static_cast<int>(seen.size())) return static_cast<int>(neighbours(v).size());
+      seen[n++] = c;
+    }
+  return n;
 }
 
 std::vector<std::uint64_t> NmMesh::edges() const {

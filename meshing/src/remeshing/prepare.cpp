@@ -1,4 +1,5 @@
-// Scan clean-up before remeshing: tiny components removed, small holes closed by a fan.
+// Scan clean-up before remeshing: tiny components removed, small holes closed by a refined
+// patch (hole_filling.cpp).
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -7,6 +8,7 @@
 #include <numbers>
 #include <unordered_map>
 
+#include "hole_filling.h"
 #include "scanmesh/meshing/remeshing/remesh.h"
 
 namespace scanmesh::remeshing {
@@ -409,14 +411,20 @@ Mesh prepare_input(const Mesh& original, const PrepareOptions& o, PrepareStats* 
       }
       for (int v : loop) used[v] = 1;
       if (!ok || loop.size() < 3 || static_cast<int>(loop.size()) > o.max_hole_edges) continue;
-      Eigen::Vector3d c = Eigen::Vector3d::Zero();
-      for (int v : loop) c += out.positions[v];
-      const int cv = static_cast<int>(out.positions.size());
-      out.positions.push_back(c / static_cast<double>(loop.size()));
-      for (std::size_t i = 0; i < loop.size(); ++i) {
-        // Boundary edge a -> b belongs to a face; the hole face runs b -> a.
-        const int a = loop[i], b = loop[(i + 1) % loop.size()];
-        out.triangles.push_back({b, a, cv});
+      std::vector<Eigen::Vector3d> corners;
+      for (int v : loop) corners.push_back(out.positions[v]);
+      // Loop vertices already joined by an edge outside the hole (an edge with a face).
+      auto joined = [&](int i, int j) {
+        const auto it = count.find({std::min(loop[i], loop[j]), std::max(loop[i], loop[j])});
+        return it != count.end() && it->second > 0;
+      };
+      const detail::HolePatch patch = detail::fill_hole(corners, joined);
+      const int base = static_cast<int>(out.positions.size());
+      out.positions.insert(out.positions.end(), patch.new_points.begin(), patch.new_points.end());
+      const int n_loop = static_cast<int>(loop.size());
+      auto vertex = [&](int k) { return k < n_loop ? loop[k] : base + (k - n_loop); };
+      for (const auto& t : patch.triangles) {
+        out.triangles.push_back({vertex(t[0]), vertex(t[1]), vertex(t[2])});
         out.face_labels.push_back(lab);
         ++st.faces_added;
       }

@@ -278,6 +278,48 @@ TEST(Prepare, DropsCrumbsAndClosesSmallHoles) {
   EXPECT_TRUE(rep.edge_manifold());
 }
 
+TEST(Prepare, ClosesAHoleWithARefinedPatchNotAFan) {
+  // A round hole in the wavy sheet: its rim is not planar (z = 2 sin(x / 4) changes by 3 mm
+  // across it). The old centroid fan put one vertex of valence ~45 there.
+  const Mesh sheet = test::wavy_sheet(20, 0, nullptr);
+  Mesh in;
+  in.positions = sheet.positions;
+  for (const auto& t : sheet.triangles) {
+    const Vec3 c = (sheet.positions[t[0]] + sheet.positions[t[1]] + sheet.positions[t[2]]) / 3;
+    if (std::hypot(c.x() - 10, c.y() - 10) > 5) in.triangles.push_back(t);
+  }
+  in.face_labels.assign(in.triangles.size(), 0);
+  PrepareStats st;
+  const Mesh out = prepare_input(in, {.max_hole_edges = 70}, &st);
+  EXPECT_EQ(st.holes_filled, 1u);  // the hole, not the sheet's 80-edge border
+  const MeshCheckReport rep = check_mesh(out);
+  EXPECT_EQ(rep.topology.boundary_loops, 1u) << rep.to_text();
+  EXPECT_TRUE(rep.edge_manifold());
+  EXPECT_EQ(rep.self_intersections, 0u);
+  EXPECT_EQ(rep.degenerate_faces, 0u);
+  std::vector<int> valence(out.positions.size(), 0);
+  for (const auto& t : out.triangles)
+    for (int c : t) ++valence[c];  // faces per vertex = valence inside
+  EXPECT_LE(*std::max_element(valence.begin(), valence.end()), 9);
+  auto min_angle_deg = [](const Vec3& a, const Vec3& b, const Vec3& c) {
+    auto at = [](const Vec3& p, const Vec3& q, const Vec3& r) {
+      return std::atan2((q - p).cross(r - p).norm(), (q - p).dot(r - p)) * 180 / std::numbers::pi;
+    };
+    return std::min({at(a, b, c), at(b, c, a), at(c, a, b)});
+  };
+  for (std::size_t f = in.triangles.size(); f < out.triangles.size(); ++f) {
+    const auto& t = out.triangles[f];
+    const Vec3 a = out.positions[t[0]], b = out.positions[t[1]], c = out.positions[t[2]];
+    const Vec3 n = (b - a).cross(c - a).normalized();
+    EXPECT_GT(n.z(), 0.8) << "patch face " << f << " folds over";  // sheet normals: z >= 0.89
+    EXPECT_GT(min_angle_deg(a, b, c), 15.0) << "patch face " << f;
+  }
+  for (std::size_t v = in.positions.size(); v < out.positions.size(); ++v) {
+    const Vec3& p = out.positions[v];
+    EXPECT_LT(std::abs(p.z() - 2 * std::sin(p.x() / 4)), 0.5) << "patch vertex " << v;
+  }
+}
+
 int vertex_at(const Mesh& m, const Vec3& p) {
   for (std::size_t i = 0; i < m.positions.size(); ++i)
     if ((m.positions[i] - p).norm() < 1e-9) return static_cast<int>(i);

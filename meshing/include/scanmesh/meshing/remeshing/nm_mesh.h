@@ -52,7 +52,8 @@ class NmMesh {
   int edge_face_count(int v, int w) const;
   //! Distinct neighbours of v (unsorted, deterministic order).
   std::vector<int> neighbours(int v) const;
-  int valence(int v) const { return static_cast<int>(neighbours(v).size()); }
+  //! Number of distinct neighbours (no allocation for up to 32; the regularisation asks often).
+  int valence(int v) const;
   //! All distinct edges as keys, sorted.
   std::vector<std::uint64_t> edges() const;
   //! The corner of f that is neither v nor w.

@@ -87,6 +87,14 @@ struct RemeshOptions {
   //! (folds, local self-intersections); off only to measure what it costs and prevents.
   bool prevent_intersections = true;
   int smoothing_passes = 10;  //!< final angle-based (or centroidal) passes (§3.5)
+  //! Angle polish after the smoothing (not in the seed): rounds over the faces whose min angle
+  //! is below polish_angle_deg; their corners move to the position that maximises the min angle
+  //! of their star (pattern search on the surface, skeleton vertices along their segment), and
+  //! their edges flip when that raises the quad's min angle at a bounded valence cost. 0: off.
+  int polish_rounds = 3;
+  double polish_angle_deg = 30.0;
+  //! Largest rise of R (3.22) an angle-raising flip may cost; a flip in a regular patch costs 4.
+  int polish_flip_cost = 2;
   //! Called with (phase name, fraction done in [0, 1]); may be empty.
   std::function<void(const std::string&, double)> progress;
 };
@@ -102,6 +110,10 @@ struct RemeshStats {
   //! Faces of the final mesh that cut another face before the repair pass (0 when prevention in
   //! the operators sufficed; the report's self_intersections counts what is left after it).
   std::size_t intersecting_faces_before_repair = 0;
+  //! Angle polish: faces below polish_angle_deg before and after it, its moves and flips.
+  std::size_t polish_bad_before = 0, polish_bad_after = 0, polish_moves = 0, polish_flips = 0;
+  //! Edges split by the repair pass to make faces of two nearby sheets follow the input.
+  std::size_t repair_splits = 0;
   double seconds_setup = 0, seconds_adapt = 0, seconds_count = 0, seconds_regularize = 0,
          seconds_smooth = 0, seconds_total = 0;
 };
