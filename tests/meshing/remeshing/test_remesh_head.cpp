@@ -53,8 +53,11 @@ TEST(RemeshHairyHead, CleanUpAndRemeshReachTheCleanHeadQuality) {
   EXPECT_GT(ps.tip_faces_removed, 0u);
   // The clean-up takes the hair crumbs and the ragged border only: at most 15 % of the faces.
   EXPECT_GT(in.triangles.size(), raw.triangles.size() * 85 / 100);
-  const MeshCheckReport in_rep = check_mesh(in, {.self_intersections = false});
+  // The hole patches must not cut the surface around them.
+  const MeshCheckReport in_rep = check_mesh(in);
   EXPECT_EQ(in_rep.nonmanifold_vertices, 0u);
+  EXPECT_TRUE(in_rep.edge_manifold());
+  EXPECT_EQ(in_rep.self_intersections, 0u);
   EXPECT_LT(in_rep.topology.boundary_loops, raw_rep.topology.boundary_loops / 4);
 
   RemeshOptions o;
@@ -70,7 +73,8 @@ TEST(RemeshHairyHead, CleanUpAndRemeshReachTheCleanHeadQuality) {
       in.triangles.size(), 100 * q.fraction_min_angle_ge_30, q.bad_at_branch, q.bad_at_boundary,
       q.bad_interior, 100 * q.fraction_irregular, q.hausdorff,
       r.stats.intersecting_faces_before_repair);
-  EXPECT_GE(q.fraction_min_angle_ge_30, 0.99);
+  // 99.42 % with centroid-fan hole fills and no angle polish; 99.89 % measured now.
+  EXPECT_GE(q.fraction_min_angle_ge_30, 0.997);
   // At 5000 vertices the border holds a larger share of the vertices than at the acceptance
   // size (20,000 on the full-resolution head: 9.6 % irregular, docs/remeshing.md); measured here
   // 10.8 %.
