@@ -15,6 +15,7 @@ NmMesh::NmMesh(const Mesh& mesh) {
   pos = mesh.positions;
   vfaces.assign(n, {});
   vertex_alive.assign(n, 1);
+  valence_cache_.assign(n, -1);
   live_vertices_ = n;
   for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
     const auto& t = mesh.triangles[f];
@@ -32,6 +33,7 @@ int NmMesh::add_vertex(const Eigen::Vector3d& x) {
   pos.push_back(x);
   vfaces.emplace_back();
   vertex_alive.push_back(1);
+  valence_cache_.push_back(-1);
   ++live_vertices_;
   return static_cast<int>(pos.size()) - 1;
 }
@@ -44,6 +46,7 @@ int NmMesh::add_face(int a, int b, int c, int face_label) {
   vfaces[a].push_back(f);
   vfaces[b].push_back(f);
   vfaces[c].push_back(f);
+  forget_valences(f);
   ++live_faces_;
   return f;
 }
@@ -55,6 +58,7 @@ void NmMesh::remove_face(int f) {
     l.erase(std::find(l.begin(), l.end(), f));
   }
   face_alive[f] = 0;
+  forget_valences(f);
   --live_faces_;
 }
 
@@ -62,6 +66,7 @@ void NmMesh::revive_face(int f) {
   if (face_alive[f]) return;
   face_alive[f] = 1;
   for (int c : tri[f]) vfaces[c].push_back(f);
+  forget_valences(f);
   ++live_faces_;
 }
 
@@ -69,16 +74,19 @@ void NmMesh::remove_vertex(int v) {
   if (!vertex_alive[v]) return;
   vertex_alive[v] = 0;
   vfaces[v].clear();
+  if (v < static_cast<int>(valence_cache_.size())) valence_cache_[v] = -1;
   --live_vertices_;
 }
 
 void NmMesh::replace_corner(int f, int from, int to) {
+  forget_valences(f);  // `from` and the two that stay lose a neighbour
   for (int& c : tri[f])
     if (c == from) {
       c = to;
       auto& l = vfaces[from];
       l.erase(std::find(l.begin(), l.end(), f));
       vfaces[to].push_back(f);
+      forget_valences(f);  // `to` gains
       return;
     }
 }
@@ -110,7 +118,19 @@ std::vector<int> NmMesh::neighbours(int v) const {
   return out;
 }
 
+void NmMesh::forget_valences(int f) {
+  for (int c : tri[f])
+    if (c < static_cast<int>(valence_cache_.size())) valence_cache_[c] = -1;
+}
+
 int NmMesh::valence(int v) const {
+  if (v >= static_cast<int>(valence_cache_.size())) return count_neighbours(v);
+  int& cached = valence_cache_[v];
+  if (cached < 0) cached = count_neighbours(v);
+  return cached;
+}
+
+int NmMesh::count_neighbours(int v) const {
   std::array<int, 32> seen;
   int n = 0;
   for (int f : vfaces[v])

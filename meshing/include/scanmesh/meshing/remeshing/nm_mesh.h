@@ -52,7 +52,9 @@ class NmMesh {
   int edge_face_count(int v, int w) const;
   //! Distinct neighbours of v (unsorted, deterministic order).
   std::vector<int> neighbours(int v) const;
-  //! Number of distinct neighbours (no allocation for up to 32; the regularisation asks often).
+  //! Number of distinct neighbours. Cached per vertex and forgotten by every change of a face
+  //! at the vertex (the regularisation asks for the same valences hundreds of thousands of
+  //! times between two changes; not thread-safe, like every other use of an NmMesh).
   int valence(int v) const;
   //! All distinct edges as keys, sorted.
   std::vector<std::uint64_t> edges() const;
@@ -65,7 +67,10 @@ class NmMesh {
   Mesh to_mesh(std::vector<int>* old_to_new = nullptr) const;
 
  private:
+  void forget_valences(int f);  // the corners of face f
+  int count_neighbours(int v) const;
   int live_vertices_ = 0, live_faces_ = 0;
+  mutable std::vector<int> valence_cache_;  // per vertex, -1: not known
 };
 
 }  // namespace scanmesh::remeshing
