@@ -174,6 +174,14 @@ std::size_t count_self_intersections(const Mesh& mesh) {
 
 }  // namespace
 
+double triangle_min_angle(const Vector3d& a, const Vector3d& b, const Vector3d& c) {
+  auto at = [](const Vector3d& p, const Vector3d& q, const Vector3d& r) {
+    const Vector3d e1 = q - p, e2 = r - p;
+    return std::atan2(e1.cross(e2).norm(), e1.dot(e2));
+  };
+  return std::min({at(a, b, c), at(b, c, a), at(c, a, b)});
+}
+
 double triangle_quality(const Vector3d& a, const Vector3d& b, const Vector3d& c) {
   const double s = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
   const double area = 0.5 * (b - a).cross(c - a).norm();

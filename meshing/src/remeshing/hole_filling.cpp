@@ -11,6 +11,8 @@
 #include <set>
 #include <utility>
 
+#include "scanmesh/meshing/mesh_check.h"
+
 namespace scanmesh::remeshing::detail {
 
 namespace {
@@ -20,14 +22,6 @@ using Tri = std::array<int, 3>;
 
 double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c) {
   return 0.5 * (b - a).cross(c - a).norm();
-}
-
-double smallest_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
-  auto at = [](const Vec3& p, const Vec3& q, const Vec3& r) {
-    const Vec3 u = q - p, v = r - p;
-    return std::atan2(u.cross(v).norm(), u.dot(v));
-  };
-  return std::min({at(a, b, c), at(b, c, a), at(c, a, b)});
 }
 
 // Twice the signed area of (a, b, c) in the (u, v) plane of the patch frame.
@@ -257,10 +251,10 @@ class Patch {
     const std::pair<int, int> cd{std::min(c, d), std::max(c, d)};
     if (c == d || faces.count(cd) || made_.count(cd)) return false;
     if (c < n_loop_ && d < n_loop_ && joined_(c, d)) return false;  // an edge outside the hole
-    const double before = std::min(smallest_angle(pos_[a], pos_[b], pos_[c]),
-                                   smallest_angle(pos_[b], pos_[a], pos_[d]));
-    const double after = std::min(smallest_angle(pos_[a], pos_[d], pos_[c]),
-                                  smallest_angle(pos_[d], pos_[b], pos_[c]));
+    const double before = std::min(triangle_min_angle(pos_[a], pos_[b], pos_[c]),
+                                   triangle_min_angle(pos_[b], pos_[a], pos_[d]));
+    const double after = std::min(triangle_min_angle(pos_[a], pos_[d], pos_[c]),
+                                  triangle_min_angle(pos_[d], pos_[b], pos_[c]));
     if (!(after > before + 1e-9)) return false;
     // Only across convex quads in the plane: the patch stays a graph over its plane.
     if (!(orient2d(pos_[a], pos_[d], pos_[c]) > 0 && orient2d(pos_[d], pos_[b], pos_[c]) > 0))

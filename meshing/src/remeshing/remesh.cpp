@@ -160,6 +160,9 @@ class Remesher {
   int simple_flips() { return o_.regularize_queue ? flip_queue() : flip_pass(false); }
   void relax_pass(bool angle_based);
   void skeleton_relax_pass();
+  // The two skeleton neighbours a, b of skeleton vertex v and their parameters sa < s(v) < sb
+  // on v's segment; false when v is not strictly between two (a segment end).
+  bool skeleton_bounds(int v, int& a, int& b, double& sa, double& sb) const;
   // `passes` x (free vertices: centroidal or angle-based move, skeleton vertices: 1D move).
   void relax_rounds(int passes, bool angle_based) {
     for (int k = 0; k < passes; ++k) {
@@ -175,8 +178,8 @@ class Remesher {
   // ---- angle polish (after the smoothing; not in the seed) ----
   double face_min_angle(int f) const;  // radians
   double star_min_angle(int v) const;
-  bool raise_star_min_angle(int v);           // pattern search on the surface / the segment
-  bool flip_raises_min_angle(int v, int w);   // applied when it does, at a bounded valence cost
+  bool raise_star_min_angle(int v);          // pattern search on the surface / the segment
+  bool flip_raises_min_angle(int v, int w);  // applied when it does, at a bounded valence cost
   void polish_angles();
   void report(const std::string& phase, double f) const {
     if (o_.progress) o_.progress(phase, f);
@@ -874,21 +877,28 @@ void Remesher::relax_pass(bool angle_based) {
   }
 }
 
+bool Remesher::skeleton_bounds(int v, int& a, int& b, double& sa, double& sb) const {
+  a = b = -1;
+  for (int x : m_.neighbours(v))
+    if (is_skel(v, x)) (a < 0 ? a : b) = x;
+  if (a < 0 || b < 0) return false;
+  const int seg = vs_[v].seg;
+  const double s = vs_[v].s;
+  sa = param_on(a, seg, s);
+  sb = param_on(b, seg, s);
+  if (sa > sb) std::swap(sa, sb), std::swap(a, b);
+  return sa < s && s < sb;
+}
+
 void Remesher::skeleton_relax_pass() {
   // 1D moves (§4.2): p_new between the two skeleton neighbours, split in the ratio of the target
   // lengths sqrt(Psi) (the area rule of §4.2 stated for lengths).
   const int n = static_cast<int>(m_.pos.size());
   for (int v = 0; v < n; ++v) {
     if (!m_.vertex_alive[v] || vs_[v].kind != VertexKind::Skeleton) continue;
-    int a = -1, b = -1;
-    for (int x : m_.neighbours(v))
-      if (is_skel(v, x)) (a < 0 ? a : b) = x;
-    if (a < 0 || b < 0) continue;
-    const int seg = vs_[v].seg;
-    const double s = vs_[v].s;
-    double sa = param_on(a, seg, s), sb = param_on(b, seg, s);
-    if (sa > sb) std::swap(sa, sb), std::swap(a, b);
-    if (!(sa < s && s < sb)) continue;
+    int a, b;
+    double sa, sb;
+    if (!skeleton_bounds(v, a, b, sa, sb)) continue;
     const double ha = vs_[a].sq, hb = vs_[b].sq;
     const double s_new = (hb * sa + ha * sb) / (ha + hb);
     const double lim = 0.5 * (sb - sa);
@@ -1124,13 +1134,7 @@ std::vector<int> Remesher::intersecting_faces() const {
 
 double Remesher::face_min_angle(int f) const {
   const auto& t = m_.tri[f];
-  double lo = std::numbers::pi;
-  for (int i = 0; i < 3; ++i) {
-    const Vec3 e1 = m_.pos[t[(i + 1) % 3]] - m_.pos[t[i]];
-    const Vec3 e2 = m_.pos[t[(i + 2) % 3]] - m_.pos[t[i]];
-    lo = std::min(lo, std::atan2(e1.cross(e2).norm(), e1.dot(e2)));
-  }
-  return lo;
+  return triangle_min_angle(m_.pos[t[0]], m_.pos[t[1]], m_.pos[t[2]]);
 }
 
 double Remesher::star_min_angle(int v) const {
@@ -1151,12 +1155,21 @@ bool Remesher::raise_star_min_angle(int v) {
   const auto nb = m_.neighbours(v);
   for (int x : nb) h += (m_.pos[x] - m_.pos[v]).norm();
   h /= std::max<std::size_t>(1, nb.size());
-  Vec3 t1, t2;
+  Vec3 t1 = Vec3::Zero(), t2 = Vec3::Zero();  // free vertices: the tangent plane
+  double s_lo = 0, s_hi = 0;  // skeleton vertices: the parameter range they may take
   if (kind == VertexKind::Free) {
     const Vec3 n = vertex_normal(v);
     if (n.isZero()) return false;
     t1 = n.unitOrthogonal();
     t2 = n.cross(t1);
+  } else {
+    // Strictly between the two skeleton neighbours, as in the 1D relaxation.
+    int a, b;
+    double sa, sb;
+    if (!skeleton_bounds(v, a, b, sa, sb)) return false;
+    const double lim = 0.5 * (sb - sa);
+    s_lo = sa + 0.05 * lim;
+    s_hi = sb - 0.05 * lim;
   }
   double best = star_min_angle(v);
   bool moved = false;
@@ -1171,16 +1184,7 @@ bool Remesher::raise_star_min_angle(int v) {
         const double a = 2 * std::numbers::pi * k / kDirections;
         project(m_.pos[v] + step * (std::cos(a) * t1 + std::sin(a) * t2), ns.iface, ns.bary);
       } else {
-        // Stay strictly between the two skeleton neighbours (same rule as the 1D relaxation).
-        int a = -1, b = -1;
-        for (int x : nb)
-          if (is_skel(v, x)) (a < 0 ? a : b) = x;
-        if (a < 0 || b < 0) return moved;
-        double sa = param_on(a, ns.seg, ns.s), sb = param_on(b, ns.seg, ns.s);
-        if (sa > sb) std::swap(sa, sb);
-        if (!(sa < ns.s && ns.s < sb)) return moved;
-        const double lim = 0.5 * (sb - sa);
-        ns.s = std::clamp(ns.s + (k == 0 ? step : -step), sa + 0.05 * lim, sb - 0.05 * lim);
+        ns.s = std::clamp(ns.s + (k == 0 ? step : -step), s_lo, s_hi);
       }
       const VState old = vs_[v];
       const Vec3 old_pos = m_.pos[v];

@@ -120,14 +120,6 @@ class TriangleGrid {
   std::vector<int> faces_;
 };
 
-double min_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
-  auto ang = [](const Vec3& p, const Vec3& q, const Vec3& r) {
-    const Vec3 e1 = q - p, e2 = r - p;
-    return std::atan2(e1.cross(e2).norm(), e1.dot(e2));
-  };
-  return std::min({ang(a, b, c), ang(b, c, a), ang(c, a, b)});
-}
-
 Rgb8 ramp(double t) {  // blue -> cyan -> yellow -> red
   t = std::clamp(t, 0.0, 1.0);
   const double r = std::clamp(2 * t - 0.5, 0.0, 1.0) * 255;
@@ -182,7 +174,7 @@ RemeshQuality evaluate_remesh(const Mesh& input, const RemeshResult& r, bool che
   std::size_t ge30 = 0;
   for (const auto& t : m.triangles) {
     const Vec3 &a = m.positions[t[0]], &b = m.positions[t[1]], &c = m.positions[t[2]];
-    const double ang = min_angle(a, b, c);
+    const double ang = triangle_min_angle(a, b, c);
     amin = std::min(amin, ang);
     asum += ang;
     if (ang >= std::numbers::pi / 6 - 1e-12) {

@@ -301,18 +301,12 @@ TEST(Prepare, ClosesAHoleWithARefinedPatchNotAFan) {
   for (const auto& t : out.triangles)
     for (int c : t) ++valence[c];  // faces per vertex = valence inside
   EXPECT_LE(*std::max_element(valence.begin(), valence.end()), 9);
-  auto min_angle_deg = [](const Vec3& a, const Vec3& b, const Vec3& c) {
-    auto at = [](const Vec3& p, const Vec3& q, const Vec3& r) {
-      return std::atan2((q - p).cross(r - p).norm(), (q - p).dot(r - p)) * 180 / std::numbers::pi;
-    };
-    return std::min({at(a, b, c), at(b, c, a), at(c, a, b)});
-  };
   for (std::size_t f = in.triangles.size(); f < out.triangles.size(); ++f) {
     const auto& t = out.triangles[f];
     const Vec3 a = out.positions[t[0]], b = out.positions[t[1]], c = out.positions[t[2]];
     const Vec3 n = (b - a).cross(c - a).normalized();
     EXPECT_GT(n.z(), 0.8) << "patch face " << f << " folds over";  // sheet normals: z >= 0.89
-    EXPECT_GT(min_angle_deg(a, b, c), 15.0) << "patch face " << f;
+    EXPECT_GT(triangle_min_angle(a, b, c) * 180 / std::numbers::pi, 15.0) << "patch face " << f;
   }
   for (std::size_t v = in.positions.size(); v < out.positions.size(); ++v) {
     const Vec3& p = out.positions[v];

@@ -48,6 +48,10 @@ MeshCheckReport check_mesh(const Mesh& mesh, const MeshCheckOptions& options = {
 bool triangles_intersect(const std::vector<Eigen::Vector3d>& P, const std::array<int, 3>& f,
                          const std::array<int, 3>& g);
 
+//! Smallest interior angle of the triangle (a, b, c), radians (atan2 form: exact near 0 and pi).
+double triangle_min_angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                          const Eigen::Vector3d& c);
+
 //! q = 4 sqrt(3) A / (sum of squared edge lengths) of one triangle.
 double triangle_quality(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                         const Eigen::Vector3d& c);
