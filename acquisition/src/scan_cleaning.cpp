@@ -2,12 +2,106 @@
 #include "scanmesh/acquisition/scan_cleaning.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <vector>
 
 #include "scanmesh/core/errors.h"
 
 namespace scanmesh {
+
+namespace {
+
+// Membrane fill of one hole: every cell becomes the mean of its valid and already estimated
+// 4-neighbours, 200 Jacobi sweeps (enough for the hole sizes filled here: they are small).
+void fill_component(RangeGrid& g, const std::vector<int>& comp, const std::vector<int>& label) {
+  const int np = g.n_phi();
+  const int hole = label[comp.front()];
+  std::vector<double> r(comp.size(), 0.0), nr(comp.size());
+  std::vector<int> sorted = comp;
+  std::sort(sorted.begin(), sorted.end());
+  std::vector<std::array<int, 4>> nbr(comp.size());  // slot of an in-hole neighbour, or -1
+  std::vector<std::array<float, 4>> fixed(comp.size());  // radius of a valid neighbour, or 0
+  for (std::size_t q = 0; q < sorted.size(); ++q) {
+    const int ci = sorted[q] % np, cj = sorted[q] / np;
+    const int nb[4][2] = {{ci - 1, cj}, {ci + 1, cj}, {ci, cj - 1}, {ci, cj + 1}};
+    for (int k = 0; k < 4; ++k) {
+      nbr[q][k] = -1;
+      fixed[q][k] = 0.0f;
+      const int qi = g.wrap_phi(nb[k][0]), qj = nb[k][1];
+      if (g.valid(qi, qj))
+        fixed[q][k] = g.radius(qi, qj);
+      else if (label[g.index(qi, qj)] == hole)
+        nbr[q][k] = static_cast<int>(std::lower_bound(sorted.begin(), sorted.end(),
+                                                      static_cast<int>(g.index(qi, qj))) -
+                                     sorted.begin());
+    }
+  }
+  for (int it = 0; it < 200; ++it) {
+    for (std::size_t q = 0; q < sorted.size(); ++q) {
+      double s = 0;
+      int n = 0;
+      for (int k = 0; k < 4; ++k) {
+        if (fixed[q][k] > 0.0f) {
+          s += fixed[q][k];
+          ++n;
+        } else if (nbr[q][k] >= 0 && r[nbr[q][k]] > 0) {
+          s += r[nbr[q][k]];
+          ++n;
+        }
+      }
+      nr[q] = n ? s / n : 0.0;
+    }
+    r.swap(nr);
+  }
+  for (std::size_t q = 0; q < sorted.size(); ++q)
+    if (r[q] > 0) g.set_sample(sorted[q] % np, sorted[q] / np, static_cast<float>(r[q]), 0.0f);
+}
+
+}  // namespace
+
+HoleFillReport fill_small_holes(RangeGrid& g, int max_cells) {
+  if (max_cells < 0) throw InvalidInputError("hole filling: the cell limit must not be negative");
+  HoleFillReport rep;
+  const int np = g.n_phi(), nh = g.n_h();
+  // 4-connected components of invalid cells (phi wraps); small ones not touching the top or
+  // bottom row are filled by repeated averaging of valid neighbours (a discrete membrane).
+  std::vector<int> label(g.cell_count(), -1);
+  std::vector<int> stack, comp;
+  int next = 0;
+  for (int j = 0; j < nh; ++j)
+    for (int i = 0; i < np; ++i) {
+      if (g.valid(i, j) || label[g.index(i, j)] >= 0) continue;
+      comp.clear();
+      bool border = false, too_big = false;
+      stack.assign(1, static_cast<int>(g.index(i, j)));
+      label[g.index(i, j)] = next;
+      while (!stack.empty()) {
+        const int c = stack.back();
+        stack.pop_back();
+        if (!too_big) comp.push_back(c);
+        if (static_cast<int>(comp.size()) > max_cells) too_big = true;
+        const int ci = c % np, cj = c / np;
+        if (cj == 0 || cj == nh - 1) border = true;
+        const int nb[4][2] = {{ci - 1, cj}, {ci + 1, cj}, {ci, cj - 1}, {ci, cj + 1}};
+        for (auto& q : nb) {
+          if (q[1] < 0 || q[1] >= nh) continue;
+          const int qi = g.wrap_phi(q[0]);
+          const std::size_t k = g.index(qi, q[1]);
+          if (g.valid(qi, q[1]) || label[k] >= 0) continue;
+          label[k] = next;
+          stack.push_back(static_cast<int>(k));
+        }
+      }
+      ++next;
+      if (border || too_big) continue;
+      fill_component(g, comp, label);
+      for (int c : comp)
+        if (g.valid(c % np, c / np)) ++rep.cells;
+      ++rep.holes;
+    }
+  return rep;
+}
 
 ScanCleaningReport clean_scan_grid(RangeGrid& g, const ScanCleaningOptions& o) {
   if (o.min_confidence < 0 || !(o.hair_threshold_mm > 0) || o.platter_margin_mm < 0 ||
@@ -60,73 +154,9 @@ ScanCleaningReport clean_scan_grid(RangeGrid& g, const ScanCleaningOptions& o) {
   }
   if (o.spikes_and_fragments) rep.spikes = clean_grid(g, o.spikes);
   if (o.fill_holes && o.max_hole_cells > 0) {
-    // 4-connected components of invalid cells; small ones not touching the top or bottom row
-    // are filled by repeated averaging of valid neighbours (a discrete membrane).
-    std::vector<int> label(g.cell_count(), -1);
-    std::vector<int> stack, comp;
-    int next = 0;
-    for (int j = 0; j < nh; ++j)
-      for (int i = 0; i < np; ++i) {
-        if (g.valid(i, j) || label[g.index(i, j)] >= 0) continue;
-        comp.clear();
-        bool border = false, too_big = false;
-        stack.assign(1, static_cast<int>(g.index(i, j)));
-        label[g.index(i, j)] = next;
-        while (!stack.empty()) {
-          const int c = stack.back();
-          stack.pop_back();
-          if (!too_big) comp.push_back(c);
-          if (static_cast<int>(comp.size()) > o.max_hole_cells) too_big = true;
-          const int ci = c % np, cj = c / np;
-          if (cj == 0 || cj == nh - 1) border = true;
-          const int nb[4][2] = {{ci - 1, cj}, {ci + 1, cj}, {ci, cj - 1}, {ci, cj + 1}};
-          for (auto& q : nb) {
-            if (q[1] < 0 || q[1] >= nh) continue;
-            const int qi = g.wrap_phi(q[0]);
-            const std::size_t k = g.index(qi, q[1]);
-            if (g.valid(qi, q[1]) || label[k] >= 0) continue;
-            label[k] = next;
-            stack.push_back(static_cast<int>(k));
-          }
-        }
-        ++next;
-        if (border || too_big) continue;
-        std::vector<double> r(comp.size(), 0.0);
-        auto neighbour_mean = [&](std::size_t idx, const std::vector<double>& cur) {
-          const int c = comp[idx], ci = c % np, cj = c / np;
-          double s = 0;
-          int n = 0;
-          const int nb[4][2] = {{ci - 1, cj}, {ci + 1, cj}, {ci, cj - 1}, {ci, cj + 1}};
-          for (auto& q : nb) {
-            const int qi = g.wrap_phi(q[0]);
-            if (g.valid(qi, q[1])) {
-              s += g.radius(qi, q[1]);
-              ++n;
-            } else {
-              const auto it =
-                  std::find(comp.begin(), comp.end(), static_cast<int>(g.index(qi, q[1])));
-              if (it != comp.end() && cur[it - comp.begin()] > 0) {
-                s += cur[it - comp.begin()];
-                ++n;
-              }
-            }
-          }
-          return n ? s / n : 0.0;
-        };
-        for (int it = 0; it < 200; ++it) {
-          std::vector<double> nr(comp.size());
-          for (std::size_t q = 0; q < comp.size(); ++q) nr[q] = neighbour_mean(q, r);
-          r.swap(nr);
-        }
-        for (std::size_t q = 0; q < comp.size(); ++q) {
-          const int ci = comp[q] % np, cj = comp[q] / np;
-          if (r[q] > 0) {
-            g.set_sample(ci, cj, static_cast<float>(r[q]), 0.0f);
-            ++rep.cells_filled;
-          }
-        }
-        ++rep.holes_filled;
-      }
+    const HoleFillReport filled = fill_small_holes(g, o.max_hole_cells);
+    rep.holes_filled = filled.holes;
+    rep.cells_filled = filled.cells;
     g.metadata["filled_cells"] = std::to_string(rep.cells_filled);
   }
   rep.valid_after = g.valid_count();

@@ -3,6 +3,7 @@
 
 #include "commands.h"
 #include "pipeline.h"
+#include "scanmesh/acquisition/scan_cleaning.h"
 #include "scanmesh/core/errors.h"
 #include "scanmesh/core/grid_export.h"
 #include "scanmesh/core/grid_file.h"
@@ -81,10 +82,17 @@ int run_clean(const CleanArgs& args) {
   const CleaningReport report = clean_grid(grid, args.options);
   grid.metadata["cleaned"] = "spikes " + std::to_string(report.spikes_removed) +
                              ", fragment cells " + std::to_string(report.fragment_cells_removed);
+  // Filling runs after the removals so the holes they leave are filled too; filled cells carry
+  // confidence 0 (never measured) and the count is recorded in the file.
+  const HoleFillReport filled = fill_small_holes(grid, args.fill_holes);
+  if (args.fill_holes > 0) grid.metadata["filled_cells"] = std::to_string(filled.cells);
   write_grid(args.out, grid);
   std::cout << "removed " << report.spikes_removed << " spikes and "
             << report.fragment_cells_removed << " cells in " << report.fragments_removed
-            << " fragments; " << report.valid_after << " valid cells remain\n";
+            << " fragments";
+  if (args.fill_holes > 0)
+    std::cout << "; filled " << filled.holes << " holes (" << filled.cells << " cells)";
+  std::cout << "; " << grid.valid_count() << " valid cells remain\n";
   return 0;
 }
 

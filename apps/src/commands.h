@@ -51,6 +51,7 @@ struct CleanArgs {
   std::string grid;
   std::string out;
   CleaningOptions options;
+  int fill_holes = 0;  //!< fill interior holes of at most this many cells (0: off)
 };
 int run_clean(const CleanArgs& args);
 

@@ -69,6 +69,11 @@ int main(int argc, char** argv) {
   clean_cmd->add_option("grid", clean.grid, "Grid file (.smg)")->required();
   clean_cmd->add_option("-o,--out", clean.out, "Cleaned grid file (.smg)")->required();
   add_cleaning_options(*clean_cmd, clean.options);
+  clean_cmd
+      ->add_option("--fill-holes", clean.fill_holes,
+                   "Afterwards fill interior holes of at most this many cells (0: off)")
+      ->check(CLI::NonNegativeNumber)
+      ->default_val(0);
 
   GridMeshArgs gm;
   auto* gm_cmd =

@@ -323,5 +323,36 @@ TEST(ScanCleaning, RemovesInjectedSpikesAndHairAndFillsSmallHoles) {
   EXPECT_THROW(clean_scan_grid(g, bad), InvalidInputError);
 }
 
+// fill_small_holes on a cylinder r = 100 + 0.01 (j - 64)^2 mm (smooth along h, constant along
+// phi): a 3 x 3 hole across the phi seam and a single cell are filled close to the true radii;
+// a hole one cell larger than the limit and one touching the first row stay holes.
+TEST(ScanCleaning, FillSmallHolesFillsOnlyInteriorHolesUpToTheLimit) {
+  RangeGrid g(64, 128);
+  auto truth = [](int j) { return static_cast<float>(100.0 + 0.01 * (j - 64) * (j - 64)); };
+  for (int j = 0; j < g.n_h(); ++j)
+    for (int i = 0; i < g.n_phi(); ++i) g.set_sample(i, j, truth(j), 1.0f);
+  for (int i : {62, 63, 0})
+    for (int j : {40, 41, 42}) g.invalidate(i, j);  // 9 cells, wrapping round phi = 0
+  g.invalidate(20, 90);                             // 1 cell
+  for (int i = 30; i < 35; ++i)
+    for (int j = 60; j < 62; ++j) g.invalidate(i, j);  // 10 cells: over the limit
+  for (int i = 10; i < 12; ++i) g.invalidate(i, 0);    // touches the first row
+  const HoleFillReport r = fill_small_holes(g, 9);
+  EXPECT_EQ(r.holes, 2u);
+  EXPECT_EQ(r.cells, 10u);
+  for (int i : {62, 63, 0})
+    for (int j : {40, 41, 42}) {
+      ASSERT_TRUE(g.valid(i, j));
+      EXPECT_EQ(g.confidence(i, j), 0.0f);
+      // The membrane is exact along phi; along h it misses the curvature (measured 0.022 mm).
+      EXPECT_NEAR(g.radius(i, j), truth(j), 0.03);
+    }
+  EXPECT_NEAR(g.radius(20, 90), truth(90), 0.01);
+  for (int i = 30; i < 35; ++i) EXPECT_FALSE(g.valid(i, 60));
+  EXPECT_FALSE(g.valid(10, 0));
+  EXPECT_THROW(fill_small_holes(g, -1), InvalidInputError);
+  EXPECT_EQ(fill_small_holes(g, 0).cells, 0u);
+}
+
 }  // namespace
 }  // namespace scanmesh

@@ -284,6 +284,40 @@ TEST(Cli, ParticlesScanModeConvergesOnASimulatedBall) {
   EXPECT_NE(json.str().find("\"mode\": \"scan\""), std::string::npos) << json.str();
 }
 
+TEST(Cli, CleanFillsSmallHolesOnlyWhenAsked) {
+  const fs::path dir = scratch_dir("clean_fill");
+  std::ofstream(dir / "scanner.yaml")
+      << "n_phi: 128\nn_h: 128\nradius_mm: 300\nh0_mm: 20\ndh_mm: 1.6\n"
+         "noise_sigma_mm: 0.05\nseed: 3\n";
+  const std::string grid = (dir / "g.smg").string();
+  RunResult r = run("sim --scanner " + (dir / "scanner.yaml").string() + " --out " + grid);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = run("clean " + grid + " --out " + (dir / "plain.smg").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.find("filled"), std::string::npos) << r.output;
+  r = run("clean " + grid + " --out " + (dir / "filled.smg").string() + " --fill-holes 40");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("filled"), std::string::npos) << r.output;
+  const RangeGrid plain = read_grid(dir / "plain.smg"), filled = read_grid(dir / "filled.smg");
+  const std::size_t added = filled.valid_count() - plain.valid_count();
+  ASSERT_GT(filled.valid_count(), plain.valid_count()) << "the head scan has small holes";
+  EXPECT_EQ(filled.metadata.at("filled_cells"), std::to_string(added));
+  std::size_t zero_confidence = 0;
+  for (int j = 0; j < filled.n_h(); ++j)
+    for (int i = 0; i < filled.n_phi(); ++i) {
+      if (!plain.valid(i, j)) {
+        zero_confidence += filled.valid(i, j) && filled.confidence(i, j) == 0.0f ? 1 : 0;
+        continue;
+      }
+      ASSERT_TRUE(filled.valid(i, j));  // filling never removes or changes a cell
+      EXPECT_EQ(filled.radius(i, j), plain.radius(i, j));
+    }
+  EXPECT_EQ(zero_confidence, added);
+  r = run("clean " + grid + " --out " + (dir / "bad.smg").string() + " --fill-holes -3");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_FALSE(fs::exists(dir / "bad.smg"));
+}
+
 TEST(Cli, SimThenExportThenGridMeshOnASmallScanner) {
   const fs::path dir = scratch_dir("pipeline");
   std::ofstream(dir / "scanner.yaml")

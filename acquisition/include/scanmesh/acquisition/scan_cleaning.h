@@ -43,6 +43,16 @@ struct ScanCleaningReport {
   std::size_t valid_before = 0, valid_after = 0;
 };
 
+struct HoleFillReport {
+  std::size_t holes = 0, cells = 0;
+};
+
+//! Fills every hole (4-connected component of invalid cells, phi wrapping) of at most
+//! `max_cells` cells that does not touch the first or last row, by a membrane (each cell the
+//! mean of its 4-neighbours); filled cells get confidence 0. Throws InvalidInputError for a
+//! negative limit.
+HoleFillReport fill_small_holes(RangeGrid& grid, int max_cells);
+
 //! Cleans in place, in the order: low confidence, platter, hair, spikes and fragments, holes.
 //! Throws InvalidInputError for negative thresholds.
 ScanCleaningReport clean_scan_grid(RangeGrid& grid, const ScanCleaningOptions& options = {});
