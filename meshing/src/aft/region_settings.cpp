@@ -79,10 +79,13 @@ RegionSettings parse_region_settings(std::string_view source, const std::string&
         s.chordal_tolerance_mm = positive(v, file, key);
       } else if (key == "min_unit_mm") {
         s.min_unit_mm = positive(v, file, key);
-      } else if (key == "relax_iterations" || key == "smooth_iterations") {
+      } else if (key == "relax_iterations" || key == "smooth_iterations" ||
+                 key == "repair_rounds") {
         const int n = v.as<int>();
         if (n < 0 || n > 1000) throw FileFormatError(file, key + " must be in 0..1000");
-        (key == "relax_iterations" ? s.relax_iterations : s.smooth_iterations) = n;
+        (key == "relax_iterations"    ? s.relax_iterations
+         : key == "smooth_iterations" ? s.smooth_iterations
+                                      : s.repair_rounds) = n;
       } else if (key == "seed") {
         s.seed = v.as<std::uint64_t>();
       } else if (key == "regions") {

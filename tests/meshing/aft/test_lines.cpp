@@ -108,11 +108,14 @@ TEST(RegionSettings, ParseAndErrors) {
 unit_mm: 5
 strategy: random
 seed: 7
+repair_rounds: 0
 regions:
   - {name: nose, point: [256, 200], unit_mm: 2.5, mesher: aft}
 )",
                                                  "r.yaml");
   EXPECT_DOUBLE_EQ(s.default_unit_mm, 5);
+  EXPECT_EQ(s.repair_rounds, 0);
+  EXPECT_THROW(parse_region_settings("repair_rounds: -2", "r.yaml"), FileFormatError);
   EXPECT_EQ(s.strategy, EdgeStrategy::Random);
   ASSERT_EQ(s.regions.size(), 1u);
   EXPECT_DOUBLE_EQ(*s.regions[0].unit_mm, 2.5);
