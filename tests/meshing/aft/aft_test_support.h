@@ -2,8 +2,13 @@
 #pragma once
 
 #include <cmath>
+#include <string>
 
 #include "scanmesh/core/range_grid.h"
+#include "scanmesh/meshing/aft/animation_lines.h"
+#include "scanmesh/meshing/aft/regions.h"
+#include "scanmesh/reconstruction/scan_surface.h"
+#include "scanmesh/sim/range_scanner.h"
 
 namespace scanmesh::aft::test {
 
@@ -18,5 +23,18 @@ inline RangeGrid cylinder_grid(double radius = 100.0, double bump = 0.0, int n_p
     }
   return g;
 }
+
+//! The sample input of issue 4: the ideal head scan, configs/sim/head-lines.svg and
+//! head-regions.yaml (settings read, not yet applied).
+struct SampleHead {
+  sim::SimulatedScan scan = sim::simulate_scan(
+      sim::builtin_head_scene(),
+      sim::ScannerConfig::from_yaml_file(std::string(SCANMESH_SOURCE_DIR) +
+                                         "/configs/sim/head-scanner-ideal.yaml"));
+  ScanSurface surface{scan.grid};
+  LineSet lines = read_lines(std::string(SCANMESH_SOURCE_DIR) + "/configs/sim/head-lines.svg");
+  RegionSettings settings =
+      read_region_settings(std::string(SCANMESH_SOURCE_DIR) + "/configs/sim/head-regions.yaml");
+};
 
 }  // namespace scanmesh::aft::test

@@ -99,20 +99,16 @@ namespace scanmesh::aft {
 namespace {
 
 TEST(AnimationMeshHead, SampleLinesGiveAValidMesh) {
-  const auto config = sim::ScannerConfig::from_yaml_file(std::string(SCANMESH_SOURCE_DIR) +
-                                                         "/configs/sim/head-scanner-ideal.yaml");
-  const sim::SimulatedScan scan = sim::simulate_scan(sim::builtin_head_scene(), config);
-  const ScanSurface surface(scan.grid);
-  const LineSet lines =
-      read_lines(std::string(SCANMESH_SOURCE_DIR) + "/configs/sim/head-lines.svg");
+  const test::SampleHead head;
+  const ScanSurface& surface = head.surface;
+  const LineSet& lines = head.lines;
   validate_lines(lines, surface);
   RegionGraph g = analyze_regions(lines, surface);
   int meshed = 0, openings = 0;
   for (const Region& r : g.regions) (r.opening ? openings : meshed)++;
   EXPECT_EQ(meshed, 17);
   EXPECT_EQ(openings, 3);
-  const RegionSettings s =
-      read_region_settings(std::string(SCANMESH_SOURCE_DIR) + "/configs/sim/head-regions.yaml");
+  const RegionSettings& s = head.settings;
   apply_region_settings(g, s, surface);
   const AnimationMesh am = build_animation_mesh(g, lines, surface, s);
   const MeshCheckReport rep = check_mesh(am.mesh);
@@ -162,15 +158,11 @@ TEST(AnimationMeshHead, SampleLinesGiveAValidMesh) {
 // front closed where the surface is steep (ears, nose). Before it, this input left 70 front
 // edges open and 33 self-intersecting pairs; at a quarter of the units 1,413 and 39,330.
 TEST(AnimationMeshHead, HalfTheUnitsStillClosesEveryFrontWithoutIntersections) {
-  const auto config = sim::ScannerConfig::from_yaml_file(std::string(SCANMESH_SOURCE_DIR) +
-                                                         "/configs/sim/head-scanner-ideal.yaml");
-  const sim::SimulatedScan scan = sim::simulate_scan(sim::builtin_head_scene(), config);
-  const ScanSurface surface(scan.grid);
-  const LineSet lines =
-      read_lines(std::string(SCANMESH_SOURCE_DIR) + "/configs/sim/head-lines.svg");
+  const test::SampleHead head;
+  const ScanSurface& surface = head.surface;
+  const LineSet& lines = head.lines;
   RegionGraph g = analyze_regions(lines, surface);
-  RegionSettings s =
-      read_region_settings(std::string(SCANMESH_SOURCE_DIR) + "/configs/sim/head-regions.yaml");
+  RegionSettings s = head.settings;
   s.default_unit_mm /= 2;
   for (auto& r : s.regions)
     if (r.unit_mm) *r.unit_mm /= 2;

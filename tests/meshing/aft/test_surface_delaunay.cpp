@@ -96,15 +96,11 @@ TEST(SurfaceDelaunay, SizeFollowsTheUnit) {
 }
 
 TEST(SurfaceDelaunayHead, EveryRegionOfTheSampleHead) {
-  const auto config = sim::ScannerConfig::from_yaml_file(std::string(SCANMESH_SOURCE_DIR) +
-                                                         "/configs/sim/head-scanner-ideal.yaml");
-  const sim::SimulatedScan scan = sim::simulate_scan(sim::builtin_head_scene(), config);
-  const ScanSurface surface(scan.grid);
-  const LineSet lines =
-      read_lines(std::string(SCANMESH_SOURCE_DIR) + "/configs/sim/head-lines.svg");
+  const test::SampleHead head;
+  const ScanSurface& surface = head.surface;
+  const LineSet& lines = head.lines;
   RegionGraph g = analyze_regions(lines, surface);
-  RegionSettings s =
-      read_region_settings(std::string(SCANMESH_SOURCE_DIR) + "/configs/sim/head-regions.yaml");
+  RegionSettings s = head.settings;
   s.default_mesher = "delaunay";
   for (auto& rule : s.regions) rule.mesher = "delaunay";
   const AnimationMesh am = mesh_with(surface, lines, g, s);
