@@ -84,8 +84,11 @@ int run_clean(const CleanArgs& args) {
                              ", fragment cells " + std::to_string(report.fragment_cells_removed);
   // Filling runs after the removals so the holes they leave are filled too; filled cells carry
   // confidence 0 (never measured) and the count is recorded in the file.
-  const HoleFillReport filled = fill_small_holes(grid, args.fill_holes);
-  if (args.fill_holes > 0) grid.metadata["filled_cells"] = std::to_string(filled.cells);
+  HoleFillReport filled;
+  if (args.fill_holes > 0) {
+    filled = fill_small_holes(grid, args.fill_holes);
+    grid.metadata["filled_cells"] = std::to_string(filled.cells);
+  }
   write_grid(args.out, grid);
   std::cout << "removed " << report.spikes_removed << " spikes and "
             << report.fragment_cells_removed << " cells in " << report.fragments_removed

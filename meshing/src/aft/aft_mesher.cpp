@@ -7,6 +7,7 @@
 // tangent frame at the front edge's midpoint; the new candidate R is constructed in 3D by
 // rotating the ideal apex about the edge until it meets the surface.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <queue>
 #include <unordered_map>
@@ -282,7 +283,7 @@ class Mesher {
     const Vector2d& pa = N_.params[e.a];
     const double pb = pa.x() + std::remainder(N_.params[e.b].x() - pa.x(), 2 * M_PI);
     const double hb = N_.params[e.b].y();
-    std::vector<int> cols;
+    std::vector<int>& cols = param_cols_;
     const auto j0 = static_cast<long>(std::floor(std::min(pa.y(), hb) / cell_));
     const auto j1 = static_cast<long>(std::floor(std::max(pa.y(), hb) / cell_));
     if (!param_columns(std::min(pa.x(), pb), std::max(pa.x(), pb), cols) ||
@@ -295,7 +296,7 @@ class Mesher {
   }
   // The alive front edges whose parameter cells overlap the box of the parameter points `pts`
   // (phi unwrapped relative to the first one), and their end points, added to nr.
-  void gather_param(const std::vector<Vector2d>& pts, Near& nr) {
+  void gather_param(const std::array<Vector2d, 3>& pts, Near& nr) {
     double lo = pts[0].x(), hi = lo, hlo = pts[0].y(), hhi = hlo;
     for (const Vector2d& p : pts) {
       const double x = pts[0].x() + std::remainder(p.x() - pts[0].x(), 2 * M_PI);
@@ -304,10 +305,11 @@ class Mesher {
       hlo = std::min(hlo, p.y());
       hhi = std::max(hhi, p.y());
     }
-    std::vector<int> cols;
+    std::vector<int>& cols = param_cols_;
     const auto j0 = static_cast<long>(std::floor(hlo / cell_));
     const auto j1 = static_cast<long>(std::floor(hhi / cell_));
-    std::vector<int> found;
+    std::vector<int>& found = param_found_;
+    found.clear();
     auto take = [&](int id) {
       if (edges_[id].alive) found.push_back(id);
     };
@@ -384,8 +386,12 @@ class Mesher {
 
   bool visible(int a, int b, int c, const Vector3d& cpos, const Vector2d& cparam, const Frame& f,
                const Near& near3d) {
-    Near nr = near3d;
-    gather_param({N_.params[a], N_.params[b], cparam}, nr);
+    // The 3D neighbourhood plus the edges near the triangle in (phi, h), in reused buffers
+    // (this runs for every candidate of every front edge).
+    visible_near_.edges.assign(near3d.edges.begin(), near3d.edges.end());
+    visible_near_.nodes.assign(near3d.nodes.begin(), near3d.nodes.end());
+    gather_param({N_.params[a], N_.params[b], cparam}, visible_near_);
+    const Near& nr = visible_near_;
     ParamFrame pf;
     pf.origin = N_.params[a];
     pf.rho = std::max(1e-6, std::hypot(f.M.x(), f.M.y()));
@@ -684,6 +690,8 @@ class Mesher {
   double phi_cell_ = 2 * M_PI;
   std::unordered_map<std::int64_t, std::vector<int>> param_grid_;  // (phi, h) cells
   std::vector<int> wide_edges_;  // edges over more than kMaxParamCells cells
+  std::vector<int> param_cols_, param_found_;  // scratch of param_bucket / gather_param
+  Near visible_near_;                          // scratch of visible()
   std::vector<int> pool_;
   std::priority_queue<std::pair<double, int>> heap_;
   std::vector<std::array<int, 3>> triangles_;
