@@ -61,11 +61,13 @@ void write_png(const std::filesystem::path& path, const Image8& image) {
   png.width = static_cast<png_uint_32>(image.width);
   png.height = static_cast<png_uint_32>(image.height);
   png.format = format_for_channels(image.channels);
-  // First call measures, second call encodes.
-  png_alloc_size_t size = 0;
-  if (!png_image_write_to_memory(&png, nullptr, &size, 0, image.pixels.data(), 0, nullptr))
-    throw IoError("cannot encode PNG '" + path.string() + "': " + png.message);
-  std::vector<std::uint8_t> buffer(size);
+  // Speed over size: a noisy 640 x 480 camera frame encodes in 27 ms instead of 208 ms and is
+  // 11 % larger (431 vs 388 KB). Recording a scan writes several such frames per turntable step,
+  // and at the default level the encoder was 80 % of the time of `scan --sim`.
+  png.flags = PNG_IMAGE_FLAG_FAST;
+  // One encode into a buffer of the largest possible size (measuring first would encode twice).
+  std::vector<std::uint8_t> buffer(PNG_IMAGE_PNG_SIZE_MAX(png));
+  png_alloc_size_t size = buffer.size();
   if (!png_image_write_to_memory(&png, buffer.data(), &size, 0, image.pixels.data(), 0, nullptr))
     throw IoError("cannot encode PNG '" + path.string() + "': " + png.message);
   buffer.resize(size);

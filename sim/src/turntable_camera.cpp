@@ -374,9 +374,8 @@ Vector3d TurntableCamera::pixel_ray(double u, double v) const {
 
 std::optional<TurntableCamera::SurfaceHit> TurntableCamera::cast(const Vector3d& origin_rig,
                                                                  const Vector3d& dir_rig,
-                                                                 double angle) const {
-  const Eigen::Matrix3d to_object = rot_z(-angle);
-  const Vector3d o = to_object * origin_rig, d = to_object * dir_rig;
+                                                                 const Turn& turn) const {
+  const Vector3d o = turn.to_object * origin_rig, d = turn.to_object * dir_rig;
   constexpr double kFar = 1e5;
   std::optional<SurfaceHit> best;
   if (pattern_) {
@@ -395,7 +394,7 @@ std::optional<TurntableCamera::SurfaceHit> TurntableCamera::cast(const Vector3d&
           h.kind = kBoardHit;
           h.p_rig = origin_rig + t * dir_rig;
           const Vector3d n_obj = den < 0 ? nb : Vector3d(-nb);
-          h.n_rig = rot_z(angle) * n_obj;
+          h.n_rig = turn.to_rig * n_obj;
           double a = 0.5;  // the back of the board is plain grey
           if (den > 0) {   // the printed side faces -z (OpenCV board convention)
             const bool inside = q.x() >= -s && q.x() <= pt.corner_cols * s && q.y() >= -s &&
@@ -416,7 +415,7 @@ std::optional<TurntableCamera::SurfaceHit> TurntableCamera::cast(const Vector3d&
       h.kind = kSceneHit;
       h.p_rig = origin_rig + hit->t * dir_rig;
       const Vector3d n = scene_.geometry(*hit).normal;
-      h.n_rig = rot_z(angle) * (n.dot(d) > 0 ? Vector3d(-n) : n);
+      h.n_rig = turn.to_rig * (n.dot(d) > 0 ? Vector3d(-n) : n);
       const Rgb8 c = scene_.color_at(hit->point);
       h.albedo = Vector3d(c.r, c.g, c.b) / 255.0;
       best = h;
@@ -441,11 +440,13 @@ std::optional<TurntableCamera::SurfaceHit> TurntableCamera::cast(const Vector3d&
   return best;
 }
 
-bool TurntableCamera::laser_reaches(const Vector3d& p_rig, int laser, double angle) const {
+TurntableCamera::Turn::Turn(double angle) : to_object(rot_z(-angle)), to_rig(rot_z(angle)) {}
+
+bool TurntableCamera::laser_reaches(const Vector3d& p_rig, int laser, const Turn& turn) const {
   const Vector3d to_laser = rig_.lasers[laser].position_mm - p_rig;
   const double dist = to_laser.norm();
   const Vector3d dir = to_laser / dist;
-  const auto h = cast(p_rig + kShadowOffsetMm * dir, dir, angle);
+  const auto h = cast(p_rig + kShadowOffsetMm * dir, dir, turn);
   return !h || h->t >= dist - 2 * kShadowOffsetMm;
 }
 
@@ -466,6 +467,7 @@ std::shared_ptr<const TurntableCamera::HitBuffer> TurntableCamera::hits(double a
   const Eigen::Matrix3d rig_from_camera = camera_from_rig_.linear().transpose();
   const Vector3d c = rig_.camera_position_mm;
   const int w = rig_.width, hgt = rig_.height;
+  const Turn turn(angle);
   auto normalized_at = [&](double u, double v) {
     // Bilinear interpolation of the per-pixel table (for anti-aliasing sub-samples).
     u = std::clamp(u, 0.0, w - 1.0);
@@ -485,13 +487,13 @@ std::shared_ptr<const TurntableCamera::HitBuffer> TurntableCamera::hits(double a
       const std::size_t i = static_cast<std::size_t>(y) * w + x;
       const Vector2d nm = normalized_[i].cast<double>();
       const Vector3d dir = (rig_from_camera * Vector3d(nm.x(), nm.y(), 1.0)).normalized();
-      const auto h = cast(c, dir, angle);
+      const auto h = cast(c, dir, turn);
       if (!h) continue;
       Vector3d albedo = h->albedo;
       bool near_edge = false;
       if (h->kind == kBoardHit && pattern_) {
         // Only pixels whose footprint may hold a printed edge need the box filter.
-        const Vector3d q = board_from_object_ * (rot_z(-angle) * h->p_rig);
+        const Vector3d q = board_from_object_ * (turn.to_object * h->p_rig);
         const double s = pattern_->square_mm, m = pattern_->margin_mm;
         const double footprint = 3.0 * h->t / std::min(rig_.intrinsics.fx, rig_.intrinsics.fy);
         auto near = [&](double v, double lo, double hi) {
@@ -509,7 +511,7 @@ std::shared_ptr<const TurntableCamera::HitBuffer> TurntableCamera::hits(double a
           for (int sx = -1; sx <= 1; ++sx) {
             const Vector2d q = normalized_at(x + sx / 3.0, y + sy / 3.0);
             const Vector3d ds = (rig_from_camera * Vector3d(q.x(), q.y(), 1.0)).normalized();
-            const auto hs = cast(c, ds, angle);
+            const auto hs = cast(c, ds, turn);
             albedo += hs ? hs->albedo : Vector3d::Zero();
           }
         albedo /= 9.0;
@@ -528,6 +530,7 @@ std::shared_ptr<const TurntableCamera::HitBuffer> TurntableCamera::hits(double a
 
 Image8 TurntableCamera::render(double angle, unsigned laser_mask) const {
   const auto buf = hits(angle);
+  const Turn turn(angle);
   const int w = rig_.width, hgt = rig_.height;
   const std::size_t n = static_cast<std::size_t>(w) * hgt;
   const Vector3d cam = rig_.camera_position_mm;
@@ -559,7 +562,7 @@ Image8 TurntableCamera::render(double angle, unsigned laser_mask) const {
         const double f = l.signed_distance(p);
         if (std::abs(f) > 5.0 * sigma) continue;
         const double lit = nrm.dot((l.position_mm - p).normalized());
-        if (lit <= 0.0 || !laser_reaches(p, k, angle)) continue;
+        if (lit <= 0.0 || !laser_reaches(p, k, turn)) continue;
         const double speckle = std::max(
             0.0, 1.0 + rig_.speckle_contrast *
                            detail::gaussian(detail::hash_key(rig_.seed, abits, k, i, kSpeckle)));
@@ -582,27 +585,21 @@ Image8 TurntableCamera::render(double angle, unsigned laser_mask) const {
         kern.push_back(wgt);
         ksum += wgt;
       }
-    std::vector<float> excess(n, 0.0f);
-    bool any = false;
+    // Only saturated pixels bloom (a few thousand along the lines), so each spreads its excess
+    // over its neighbours: O(saturated x kernel) instead of a kernel sum at every pixel. The
+    // sums run serially in pixel order, so the frame is the same for any thread count.
+    const double gain = rig_.bloom_fraction / ksum;
     for (std::size_t i = 0; i < n; ++i) {
-      excess[i] = std::max(0.0f, base[3 * i] + laser[i] - 255.0f);
-      any = any || excess[i] > 0.0f;
-    }
-    if (any) {
-#pragma omp parallel for schedule(static)
-      for (int y = 0; y < hgt; ++y)
-        for (int x = 0; x < w; ++x) {
-          double s = 0.0;
-          int ki = 0;
-          for (int dy = -rad; dy <= rad; ++dy)
-            for (int dx = -rad; dx <= rad; ++dx, ++ki) {
-              const int xx = x + dx, yy = y + dy;
-              if (xx < 0 || yy < 0 || xx >= w || yy >= hgt) continue;
-              const float e = excess[static_cast<std::size_t>(yy) * w + xx];
-              if (e > 0.0f) s += kern[ki] * e;
-            }
-          bloom[static_cast<std::size_t>(y) * w + x] =
-              static_cast<float>(rig_.bloom_fraction * s / ksum);
+      if (!(laser[i] > 0.0f)) continue;
+      const float e = base[3 * i] + laser[i] - 255.0f;
+      if (!(e > 0.0f)) continue;
+      const int x = static_cast<int>(i % w), y = static_cast<int>(i / w);
+      int ki = 0;
+      for (int dy = -rad; dy <= rad; ++dy)
+        for (int dx = -rad; dx <= rad; ++dx, ++ki) {
+          const int xx = x + dx, yy = y + dy;
+          if (xx < 0 || yy < 0 || xx >= w || yy >= hgt) continue;
+          bloom[static_cast<std::size_t>(yy) * w + xx] += static_cast<float>(gain * kern[ki] * e);
         }
     }
   }
@@ -612,14 +609,17 @@ Image8 TurntableCamera::render(double angle, unsigned laser_mask) const {
   for (int y = 0; y < hgt; ++y)
     for (int x = 0; x < w; ++x) {
       const std::size_t i = static_cast<std::size_t>(y) * w + x;
+      // One counter-based key per pixel, one mix per channel: the noise is still a pure
+      // function of (seed, angle, lasers, pixel, channel), at a fraction of the hashing cost.
+      const std::uint64_t key = detail::hash_key(rig_.seed, abits, laser_mask, i, kPixelNoise);
       for (int ch = 0; ch < 3; ++ch) {
         const double v = base[3 * i + ch] + laser_weight[ch] * laser[i] + bloom[i];
         const double sd = std::sqrt(rig_.noise_sigma * rig_.noise_sigma +
                                     rig_.shot_noise_gain * std::max(0.0, v));
-        const double noisy = v + sd * detail::gaussian(detail::hash_key(
-                                          rig_.seed, abits, laser_mask, 3 * i + ch, kPixelNoise));
+        const double noisy = v + sd * detail::gaussian_from_bits(
+                                          detail::mix64(key + static_cast<std::uint64_t>(ch)));
         img.pixels[3 * i + ch] =
-            static_cast<std::uint8_t>(std::clamp(std::lround(noisy), 0L, 255L));
+            static_cast<std::uint8_t>(std::clamp(std::floor(noisy + 0.5), 0.0, 255.0));
       }
     }
   return img;
@@ -629,6 +629,7 @@ std::vector<LinePointTruth> TurntableCamera::laser_line_truth(double angle, int 
   if (laser < 0 || laser >= laser_count())
     throw InvalidInputError("turntable camera: no laser " + std::to_string(laser));
   const auto buf = hits(angle);
+  const Turn turn(angle);
   const auto& l = rig_.lasers[laser];
   const int w = rig_.width, hgt = rig_.height;
   const Vector3d cam = rig_.camera_position_mm;
@@ -649,7 +650,7 @@ std::vector<LinePointTruth> TurntableCamera::laser_line_truth(double angle, int 
       for (int it = 0; it < 80; ++it) {
         u = (std::abs(fb - fa) > 0) ? (ua * fb - ub * fa) / (fb - fa) : 0.5 * (ua + ub);
         if (!(u > ua && u < ub)) u = 0.5 * (ua + ub);
-        hit = cast(cam, pixel_ray(u, y), angle);
+        hit = cast(cam, pixel_ray(u, y), turn);
         if (!hit) break;
         fu = l.signed_distance(hit->p_rig);
         if (std::abs(fu) < 1e-10 || ub - ua < 1e-10) break;
@@ -669,12 +670,12 @@ std::vector<LinePointTruth> TurntableCamera::laser_line_truth(double angle, int 
       if (!hit || std::abs(fu) > 1e-6) continue;
       if (hit->n_rig.dot((l.position_mm - hit->p_rig).normalized()) <= 0.0) continue;
       if (hit->n_rig.dot((cam - hit->p_rig).normalized()) <= 0.0) continue;
-      if (!laser_reaches(hit->p_rig, laser, angle)) continue;
+      if (!laser_reaches(hit->p_rig, laser, turn)) continue;
       LinePointTruth t;
       t.row = y;
       t.u = u;
       t.point_rig = hit->p_rig;
-      t.point_object = rot_z(-angle) * hit->p_rig;
+      t.point_object = turn.to_object * hit->p_rig;
       t.on_platform = hit->kind != kSceneHit;
       rows[y].push_back(t);
     }

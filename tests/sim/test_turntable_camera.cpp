@@ -82,6 +82,35 @@ TEST(TurntableCamera, RenderIsDeterministicAndSeedDependent) {
   EXPECT_EQ(fa.channels, 3);
 }
 
+TEST(TurntableCamera, SensorNoiseHasTheConfiguredReadAndShotVariance) {
+  // Laser off, so every pixel is shading plus noise; the same frame without noise is the truth.
+  const Scene scene = sphere_scene();
+  RigConfig clean = small_rig();
+  clean.noise_sigma = 0;
+  clean.shot_noise_gain = 0;
+  RigConfig noisy = small_rig();
+  noisy.noise_sigma = 4.0;
+  noisy.shot_noise_gain = 0.1;
+  const Image8 c = TurntableCamera(scene, clean).render(0.4, 0u);
+  const Image8 f = TurntableCamera(scene, noisy).render(0.4, 0u);
+  ASSERT_EQ(c.pixels.size(), f.pixels.size());
+  // Residual variance per clean value v, away from clipping: 16 + 0.1 v, plus the rounding of
+  // both frames (2 x 1/12).
+  double ratio_sum = 0, mean_sum = 0;
+  long n = 0;
+  for (std::size_t i = 0; i < c.pixels.size(); ++i) {
+    const double v = c.pixels[i];
+    if (v < 30 || v > 200) continue;
+    const double d = double(f.pixels[i]) - v;
+    ratio_sum += d * d / (16.0 + 0.1 * v + 1.0 / 6.0);
+    mean_sum += d;
+    ++n;
+  }
+  ASSERT_GT(n, 20000);
+  EXPECT_NEAR(ratio_sum / n, 1.0, 0.03);
+  EXPECT_NEAR(mean_sum / n, 0.0, 0.1);
+}
+
 TEST(TurntableCamera, LineTruthLiesOnSphereSheetAndRenderedLine) {
   const double radius = 50.0, zc = 70.0;
   const Scene scene = sphere_scene(radius, zc);

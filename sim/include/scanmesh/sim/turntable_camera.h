@@ -166,9 +166,14 @@ class TurntableCamera {
  private:
   std::shared_ptr<const HitBuffer> hits(double angle) const;
   struct SurfaceHit;
+  //! The turntable's rotation at one angle, built once per frame rather than once per ray.
+  struct Turn {
+    explicit Turn(double angle);
+    Eigen::Matrix3d to_object, to_rig;
+  };
   std::optional<SurfaceHit> cast(const Eigen::Vector3d& origin_rig, const Eigen::Vector3d& dir_rig,
-                                 double angle) const;
-  bool laser_reaches(const Eigen::Vector3d& p_rig, int laser, double angle) const;
+                                 const Turn& turn) const;
+  bool laser_reaches(const Eigen::Vector3d& p_rig, int laser, const Turn& turn) const;
 
   const Scene& scene_;
   RigConfig rig_;
