@@ -27,11 +27,6 @@ struct HermiteBasis {
   }
 };
 
-// Node data of the Hermite interpolant in grid units (per index step).
-struct NodeData {
-  double r, r_u, r_v, r_uv;
-};
-
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -81,6 +76,10 @@ ScanSurface::ScanSurface(const RangeGrid& grid)
   for (int j = 0; j + 1 < n_h_; ++j)
     for (int i = 0; i < n_phi_; ++i)
       support_ok_[j * static_cast<std::size_t>(n_phi_) + i] = support_valid(i, j);
+  hermite_.resize(r_.size());
+  for (int j = 0; j < n_h_; ++j)
+    for (int i = 0; i < n_phi_; ++i)
+      if (cell_valid(i, j)) hermite_[j * static_cast<std::size_t>(n_phi_) + i] = hermite_node(i, j);
   // Root search samples finer than the finest cell: phi spacing at the smallest radius.
   double min_r = std::numeric_limits<double>::infinity();
   for (std::size_t k = 0; k < r_.size(); ++k)
@@ -137,26 +136,59 @@ double slope(bool has_prev, double prev, double here, bool has_next, double next
 
 }  // namespace
 
+ScanSurface::HermiteNode ScanSurface::hermite_node(int ni, int nj) const {
+  const double r = r_at(ni, nj);
+  const bool left = cell_valid(ni - 1, nj), right = cell_valid(ni + 1, nj);
+  const bool down = cell_valid(ni, nj - 1), up = cell_valid(ni, nj + 1);
+  HermiteNode d{r, slope(left, left ? r_at(ni - 1, nj) : 0, r, right, right ? r_at(ni + 1, nj) : 0),
+                slope(down, down ? r_at(ni, nj - 1) : 0, r, up, up ? r_at(ni, nj + 1) : 0), 0.0};
+  if (cell_valid(ni - 1, nj - 1) && cell_valid(ni + 1, nj - 1) && cell_valid(ni - 1, nj + 1) &&
+      cell_valid(ni + 1, nj + 1))
+    d.r_uv = 0.25 * (r_at(ni + 1, nj + 1) - r_at(ni + 1, nj - 1) - r_at(ni - 1, nj + 1) +
+                     r_at(ni - 1, nj - 1));
+  return d;
+}
+
+bool ScanSurface::patch_at(double phi, double h, int& i, int& j, double& s, double& t) const {
+  double u, v;
+  if (!to_grid(phi, h, u, v)) return false;
+  i = std::min(static_cast<int>(u), n_phi_ - 1);
+  j = std::min(static_cast<int>(v), n_h_ - 2);
+  if (!support_ok_[static_cast<std::size_t>(j) * n_phi_ + i]) return false;
+  s = u - i;
+  t = v - j;
+  return true;
+}
+
+std::optional<double> ScanSurface::radius_value(double phi, double h) const {
+  int i, j;
+  double s, t;
+  if (!patch_at(phi, h, i, j, s, t)) return std::nullopt;
+  const HermiteNode* n[2][2] = {
+      {&hermite_[index_wrapped(i, j)], &hermite_[index_wrapped(i, j + 1)]},
+      {&hermite_[index_wrapped(i + 1, j)], &hermite_[index_wrapped(i + 1, j + 1)]}};
+  // The value terms of radius() below, in the same order, so the result is the same bit for bit.
+  const double s2 = s * s, s3 = s2 * s, t2 = t * t, t3 = t2 * t;
+  const double vs[2] = {2 * s3 - 3 * s2 + 1, -2 * s3 + 3 * s2}, ds[2] = {s3 - 2 * s2 + s, s3 - s2};
+  const double vt[2] = {2 * t3 - 3 * t2 + 1, -2 * t3 + 3 * t2}, dt[2] = {t3 - 2 * t2 + t, t3 - t2};
+  double r = 0;
+  for (int a = 0; a < 2; ++a)
+    for (int b = 0; b < 2; ++b) {
+      const HermiteNode& c = *n[a][b];
+      r += c.r * vs[a] * vt[b] + c.r_u * ds[a] * vt[b] + c.r_v * vs[a] * dt[b] +
+           c.r_uv * ds[a] * dt[b];
+    }
+  return r;
+}
+
 std::optional<RadiusJet> ScanSurface::radius(double phi, double h) const {
   double u, v;
   if (!to_grid(phi, h, u, v)) return std::nullopt;
   const int i = std::min(static_cast<int>(u), n_phi_ - 1);
   const int j = std::min(static_cast<int>(v), n_h_ - 2);
   if (!support_ok_[static_cast<std::size_t>(j) * n_phi_ + i]) return std::nullopt;
-
-  auto node = [&](int ni, int nj) {
-    const double r = r_at(ni, nj);
-    const bool left = cell_valid(ni - 1, nj), right = cell_valid(ni + 1, nj);
-    const bool down = cell_valid(ni, nj - 1), up = cell_valid(ni, nj + 1);
-    NodeData d{r, slope(left, left ? r_at(ni - 1, nj) : 0, r, right, right ? r_at(ni + 1, nj) : 0),
-               slope(down, down ? r_at(ni, nj - 1) : 0, r, up, up ? r_at(ni, nj + 1) : 0), 0.0};
-    if (cell_valid(ni - 1, nj - 1) && cell_valid(ni + 1, nj - 1) && cell_valid(ni - 1, nj + 1) &&
-        cell_valid(ni + 1, nj + 1))
-      d.r_uv = 0.25 * (r_at(ni + 1, nj + 1) - r_at(ni + 1, nj - 1) - r_at(ni - 1, nj + 1) +
-                       r_at(ni - 1, nj - 1));
-    return d;
-  };
-  const std::array<std::array<NodeData, 2>, 2> n = {
+  auto node = [&](int ni, int nj) -> const HermiteNode& { return hermite_[index_wrapped(ni, nj)]; };
+  const std::array<std::array<HermiteNode, 2>, 2> n = {
       {{node(i, j), node(i, j + 1)}, {node(i + 1, j), node(i + 1, j + 1)}}};
   const HermiteBasis bs(u - i), bt(v - j);
 
@@ -168,7 +200,7 @@ std::optional<RadiusJet> ScanSurface::radius(double phi, double h) const {
       const auto& ds = a == 0 ? bs.d0 : bs.d1;
       const auto& vt = b == 0 ? bt.v0 : bt.v1;
       const auto& dt = b == 0 ? bt.d0 : bt.d1;
-      const NodeData& c = n[a][b];
+      const HermiteNode& c = n[a][b];
       auto term = [&](int ks, int kt) {
         return c.r * vs[ks] * vt[kt] + c.r_u * ds[ks] * vt[kt] + c.r_v * vs[ks] * dt[kt] +
                c.r_uv * ds[ks] * dt[kt];
@@ -228,9 +260,9 @@ Eigen::Vector3d ScanSurface::to_cylindrical(const Eigen::Vector3d& x) {
 
 std::optional<double> ScanSurface::implicit_value(const Eigen::Vector3d& x) const {
   const Eigen::Vector3d c = to_cylindrical(x);
-  const auto r = radius(c.x(), c.y());
+  const auto r = radius_value(c.x(), c.y());
   if (!r) return std::nullopt;
-  return r->r - c.z();
+  return *r - c.z();
 }
 
 std::optional<ImplicitSample> ScanSurface::implicit(const Eigen::Vector3d& x) const {

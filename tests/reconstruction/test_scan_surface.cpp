@@ -77,6 +77,29 @@ TEST(ScanSurface, NeverInterpolatesAcrossAnInvalidCell) {
   EXPECT_FALSE(surface.defined(1.0, g.h(511) + 1.0));
 }
 
+TEST(ScanSurface, RadiusValueIsTheJetsValueBitForBitAndUndefinedWhereItIs) {
+  // Holes and a rough grid, so one-sided slopes and missing twists are exercised too.
+  auto scan = test::sphere_scan(0.05);
+  RangeGrid g = scan.grid;
+  for (int k = 0; k < 40; ++k) g.invalidate((37 * k) % 512, 60 + (53 * k) % 400);
+  const ScanSurface surface(g);
+  int compared = 0, undefined = 0;
+  for (double h = g.h(0) - 2.0; h < g.h(511) + 2.0; h += 0.613)
+    for (double phi = -0.3; phi < 2 * kPi + 0.3; phi += 0.0173) {
+      const auto jet = surface.radius(phi, h);
+      const auto value = surface.radius_value(phi, h);
+      ASSERT_EQ(jet.has_value(), value.has_value()) << phi << " " << h;
+      if (!jet) {
+        ++undefined;
+        continue;
+      }
+      ASSERT_EQ(jet->r, *value) << phi << " " << h;  // exact, not near
+      ++compared;
+    }
+  EXPECT_GT(compared, 50000);
+  EXPECT_GT(undefined, 1000);
+}
+
 TEST(ScanSurface, SegmentThroughTheHeadFindsEveryCrossingAndAMissFindsNone) {
   sim::ScannerConfig c = sim::builtin_head_scanner();
   c.noise_sigma_mm = 0.0;

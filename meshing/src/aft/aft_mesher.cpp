@@ -477,9 +477,9 @@ class Mesher {
   // F(x) = r(phi, h) - rho at a point: > 0 inside the surface, < 0 outside.
   std::optional<double> implicit_at(const Vector3d& x) const {
     const Vector3d c = ScanSurface::to_cylindrical(x);
-    const auto r = S_.radius(c.x(), c.y());
+    const auto r = S_.radius_value(c.x(), c.y());
     if (!r) return std::nullopt;
-    return r->r - c.z();
+    return *r - c.z();
   }
 
   std::optional<Vector3d> construct_r(const Frame& f, double height) const {

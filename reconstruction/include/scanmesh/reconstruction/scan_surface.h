@@ -69,6 +69,8 @@ class ScanSurface {
 
   //! Bicubic r and its derivatives at any (phi, h); nullopt where not defined.
   std::optional<RadiusJet> radius(double phi, double h) const;
+  //! r alone (the same value as radius()->r, bit for bit), for root searches.
+  std::optional<double> radius_value(double phi, double h) const;
   std::optional<SurfaceJet> evaluate(double phi, double h) const;
   std::optional<Eigen::Vector3d> position(double phi, double h) const;
 
@@ -108,11 +110,20 @@ class ScanSurface {
 
  private:
   bool cell_valid(int i, int j) const;
-  float r_at(int i, int j) const;  // i wrapped, j in range
+  float r_at(int i, int j) const;                  // i wrapped, j in range
+  std::size_t index_wrapped(int i, int j) const {  // i wrapped, j in range
+    return static_cast<std::size_t>(j) * n_phi_ + ((i % n_phi_) + n_phi_) % n_phi_;
+  }
   bool support_valid(int i, int j) const;
   // Grid coordinates: u in [0, n_phi), v in [0, n_h - 1].
   bool to_grid(double phi, double h, double& u, double& v) const;
   std::optional<double> implicit_value(const Eigen::Vector3d& x) const;
+  // The patch of (phi, h): corner (i, j) and the local coordinates; false where undefined.
+  bool patch_at(double phi, double h, int& i, int& j, double& s, double& t) const;
+  struct HermiteNode {
+    double r, r_u, r_v, r_uv;  // value and slopes in grid units (per index step)
+  };
+  HermiteNode hermite_node(int i, int j) const;
 
   int n_phi_, n_h_;
   double phi0_, h0_, dphi_, dh_;
@@ -120,6 +131,9 @@ class ScanSurface {
   std::vector<std::uint8_t> valid_;
   // support_ok_[index(i, j)]: the 4 x 4 support of the patch [i, i+1] x [j, j+1] is valid.
   std::vector<std::uint8_t> support_ok_;
+  // hermite_[index(i, j)]: the interpolant's node data, computed once (valid cells only);
+  // building it per evaluation was the largest cost of the AFT at fine unit sizes.
+  std::vector<HermiteNode> hermite_;
   double sampling_step_mm_ = 0;  // root-search step: a quarter of the finest cell
 };
 
