@@ -182,6 +182,10 @@ std::optional<double> ScanSurface::radius_value(double phi, double h) const {
 }
 
 std::optional<RadiusJet> ScanSurface::radius(double phi, double h) const {
+  return radius_jet(phi, h, true);
+}
+
+std::optional<RadiusJet> ScanSurface::radius_jet(double phi, double h, bool second_order) const {
   double u, v;
   if (!to_grid(phi, h, u, v)) return std::nullopt;
   const int i = std::min(static_cast<int>(u), n_phi_ - 1);
@@ -208,6 +212,7 @@ std::optional<RadiusJet> ScanSurface::radius(double phi, double h) const {
       acc[0] += term(0, 0);
       acc[1] += term(1, 0);
       acc[2] += term(0, 1);
+      if (!second_order) continue;
       acc[3] += term(2, 0);
       acc[4] += term(1, 1);
       acc[5] += term(0, 2);
@@ -228,10 +233,21 @@ std::optional<SurfaceJet> ScanSurface::evaluate(double phi, double h) const {
   return lift(phi, h, *r);
 }
 
-std::optional<Eigen::Vector3d> ScanSurface::position(double phi, double h) const {
-  const auto r = radius(phi, h);
+std::optional<SurfacePoint> ScanSurface::point_normal(double phi, double h) const {
+  const auto r = radius_jet(phi, h, false);
   if (!r) return std::nullopt;
-  return Eigen::Vector3d(r->r * std::cos(phi), r->r * std::sin(phi), h);
+  // lift() without the second-order terms.
+  const double c = std::cos(phi), s = std::sin(phi);
+  const Eigen::Vector3d radial(c, s, 0), tangential(-s, c, 0);
+  const Eigen::Vector3d d_phi = r->r_phi * radial + r->r * tangential;
+  const Eigen::Vector3d d_h = r->r_h * radial + Eigen::Vector3d::UnitZ();
+  return SurfacePoint{r->r * radial + Eigen::Vector3d(0, 0, h), d_phi.cross(d_h).normalized()};
+}
+
+std::optional<Eigen::Vector3d> ScanSurface::position(double phi, double h) const {
+  const auto r = radius_value(phi, h);
+  if (!r) return std::nullopt;
+  return Eigen::Vector3d(*r * std::cos(phi), *r * std::sin(phi), h);
 }
 
 std::optional<RadiusJet> ScanSurface::node_jet(int i, int j) const {
@@ -372,12 +388,17 @@ std::optional<SurfaceProjection> ScanSurface::project(const Eigen::Vector3d& x) 
   const Eigen::Vector3d c = to_cylindrical(x);
   double phi = c.x(), h = c.y();
   for (int it = 0; it < 50; ++it) {
-    const auto jet = evaluate(phi, h);
-    if (!jet) return std::nullopt;
+    // Gauss-Newton needs the position and the first derivatives only (lift() without the
+    // second-order terms: the same values).
+    const auto r = radius_jet(phi, h, false);
+    if (!r) return std::nullopt;
+    const double cs = std::cos(phi), sn = std::sin(phi);
+    const Eigen::Vector3d radial(cs, sn, 0), tangential(-sn, cs, 0);
+    const Eigen::Vector3d position = r->r * radial + Eigen::Vector3d(0, 0, h);
     Eigen::Matrix<double, 3, 2> jac;
-    jac << jet->d_phi, jet->d_h;
+    jac << r->r_phi * radial + r->r * tangential, r->r_h * radial + Eigen::Vector3d::UnitZ();
     const Eigen::Vector2d delta =
-        (jac.transpose() * jac).ldlt().solve(jac.transpose() * (x - jet->position));
+        (jac.transpose() * jac).ldlt().solve(jac.transpose() * (x - position));
     // Damp steps larger than a few cells: the Gauss-Newton model is local.
     const double limit = 4.0;
     const double scale =

@@ -77,7 +77,7 @@ TEST(ScanSurface, NeverInterpolatesAcrossAnInvalidCell) {
   EXPECT_FALSE(surface.defined(1.0, g.h(511) + 1.0));
 }
 
-TEST(ScanSurface, RadiusValueIsTheJetsValueBitForBitAndUndefinedWhereItIs) {
+TEST(ScanSurface, CheapEvaluationsEqualTheFullJetBitForBitAndAreUndefinedWhereItIs) {
   // Holes and a rough grid, so one-sided slopes and missing twists are exercised too.
   auto scan = test::sphere_scan(0.05);
   RangeGrid g = scan.grid;
@@ -94,6 +94,13 @@ TEST(ScanSurface, RadiusValueIsTheJetsValueBitForBitAndUndefinedWhereItIs) {
         continue;
       }
       ASSERT_EQ(jet->r, *value) << phi << " " << h;  // exact, not near
+      // The cheaper position and normal are evaluate()'s, exactly.
+      const auto full = surface.evaluate(phi, h);
+      const auto cheap = surface.point_normal(phi, h);
+      ASSERT_TRUE(full && cheap);
+      ASSERT_EQ(full->position, cheap->position);
+      ASSERT_EQ(full->normal(), cheap->normal);
+      ASSERT_EQ(full->position, *surface.position(phi, h));
       ++compared;
     }
   EXPECT_GT(compared, 50000);

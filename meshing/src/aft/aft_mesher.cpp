@@ -21,20 +21,20 @@ using Eigen::Vector2d;
 using Eigen::Vector3d;
 
 int NodeStore::add(const Vector2d& param, const ScanSurface& surface) {
-  const auto jet = surface.evaluate(param.x(), param.y());
-  if (!jet) return -1;
+  const auto p = surface.point_normal(param.x(), param.y());
+  if (!p) return -1;
   params.push_back(param);
-  pos.push_back(jet->position);
-  normal.push_back(jet->normal());
+  pos.push_back(p->position);
+  normal.push_back(p->normal);
   return static_cast<int>(params.size()) - 1;
 }
 
 bool NodeStore::move(int i, const Vector2d& param, const ScanSurface& surface) {
-  const auto jet = surface.evaluate(param.x(), param.y());
-  if (!jet) return false;
+  const auto p = surface.point_normal(param.x(), param.y());
+  if (!p) return false;
   params[i] = param;
-  pos[i] = jet->position;
-  normal[i] = jet->normal();
+  pos[i] = p->position;
+  normal[i] = p->normal;
   return true;
 }
 
@@ -295,8 +295,8 @@ class Mesher {
       for (long j = j0; j <= j1; ++j) param_grid_[param_key(col, j)].push_back(id);
   }
   // The alive front edges whose parameter cells overlap the box of the parameter points `pts`
-  // (phi unwrapped relative to the first one), and their end points, added to nr.
-  void gather_param(const std::array<Vector2d, 3>& pts, Near& nr) {
+  // (phi unwrapped relative to the first one), into param_found_ (an edge may repeat).
+  void gather_param(const std::array<Vector2d, 3>& pts) {
     double lo = pts[0].x(), hi = lo, hlo = pts[0].y(), hhi = hlo;
     for (const Vector2d& p : pts) {
       const double x = pts[0].x() + std::remainder(p.x() - pts[0].x(), 2 * M_PI);
@@ -323,16 +323,6 @@ class Mesher {
         for (int id : list) take(id);
     }
     for (int id : wide_edges_) take(id);
-    if (found.empty()) return;
-    nr.edges.insert(nr.edges.end(), found.begin(), found.end());
-    for (int id : found) {
-      nr.nodes.push_back(edges_[id].a);
-      nr.nodes.push_back(edges_[id].b);
-    }
-    std::sort(nr.edges.begin(), nr.edges.end());
-    nr.edges.erase(std::unique(nr.edges.begin(), nr.edges.end()), nr.edges.end());
-    std::sort(nr.nodes.begin(), nr.nodes.end());
-    nr.nodes.erase(std::unique(nr.nodes.begin(), nr.nodes.end()), nr.nodes.end());
   }
 
   Near gather(int self, const Frame& f, double radius) {
@@ -386,12 +376,6 @@ class Mesher {
 
   bool visible(int a, int b, int c, const Vector3d& cpos, const Vector2d& cparam, const Frame& f,
                const Near& near3d) {
-    // The 3D neighbourhood plus the edges near the triangle in (phi, h), in reused buffers
-    // (this runs for every candidate of every front edge).
-    visible_near_.edges.assign(near3d.edges.begin(), near3d.edges.end());
-    visible_near_.nodes.assign(near3d.nodes.begin(), near3d.nodes.end());
-    gather_param({N_.params[a], N_.params[b], cparam}, visible_near_);
-    const Near& nr = visible_near_;
     ParamFrame pf;
     pf.origin = N_.params[a];
     pf.rho = std::max(1e-6, std::hypot(f.M.x(), f.M.y()));
@@ -409,15 +393,13 @@ class Mesher {
     const Vector3d nt = (N_.pos[b] - N_.pos[a]).cross(cpos - N_.pos[a]);
     if (!relaxed_ && nt.dot(f.n) <= 0) return false;
     if (c >= 0 && (find(a, c) >= 0 || find(c, b) >= 0)) return false;
-    for (int id : nr.edges) {
+    // A front edge that crosses the triangle or enters it at a corner.
+    auto edge_blocks = [&](int id) {
       const FEdge& e = edges_[id];
       const Vector2d P = P2(e.a), Q = P2(e.b);
       const bool ta = e.a == a || e.a == b || e.a == c, tb = e.b == a || e.b == b || e.b == c;
-      if (ta && tb) continue;  // a side of the triangle
-      if (!ta && !tb) {
-        if (segments_cross(A, C, P, Q, eps) || segments_cross(B, C, P, Q, eps)) return false;
-        continue;
-      }
+      if (ta && tb) return false;  // a side of the triangle
+      if (!ta && !tb) return segments_cross(A, C, P, Q, eps) || segments_cross(B, C, P, Q, eps);
       // One end at a corner: must not point into the triangle there, nor cross the far side.
       const int v = ta ? e.a : e.b;
       const Vector2d V = ta ? P : Q, W = ta ? Q : P;
@@ -433,19 +415,29 @@ class Mesher {
         from = A - C;
         to = B - C;
       }
-      if (cross2(from, d) > eps && cross2(d, to) > eps) return false;
-      if (v != c && segments_cross(v == a ? B : A, C, V, W, eps)) return false;
-      if (v == c && segments_cross(A, B, V, W, eps)) return false;
-    }
-    for (int v : nr.nodes) {
-      if (v == a || v == b || v == c) continue;
+      if (cross2(from, d) > eps && cross2(d, to) > eps) return true;
+      if (v != c && segments_cross(v == a ? B : A, C, V, W, eps)) return true;
+      return v == c && segments_cross(A, B, V, W, eps);
+    };
+    // A front node inside or on a side: a node on a new side (e.g. the middle one of three
+    // collinear boundary nodes) would be skipped by the new edge and leave a zero-area loop.
+    const double tol = 1e-7 * scale * scale;
+    auto node_blocks = [&](int v) {
+      if (v == a || v == b || v == c) return false;
       const Vector2d P = P2(v);
-      // Inside or on a side: a node on a new side (e.g. the middle one of three collinear
-      // boundary nodes) would be skipped by the new edge and leave a zero-area front loop.
-      const double tol = 1e-7 * scale * scale;
-      if (cross2(B - A, P - A) > -tol && cross2(C - B, P - B) > -tol && cross2(A - C, P - C) > -tol)
-        return false;
-    }
+      return cross2(B - A, P - A) > -tol && cross2(C - B, P - B) > -tol &&
+             cross2(A - C, P - C) > -tol;
+    };
+    // The 3D neighbourhood, then the edges near the triangle in (phi, h) and their end points.
+    // The answer is an AND over all of them, so repeats and order do not matter (no merging or
+    // sorting: this runs for every candidate of every front edge).
+    for (int id : near3d.edges)
+      if (edge_blocks(id)) return false;
+    for (int v : near3d.nodes)
+      if (node_blocks(v)) return false;
+    gather_param({N_.params[a], N_.params[b], cparam});
+    for (int id : param_found_)
+      if (edge_blocks(id) || node_blocks(edges_[id].a) || node_blocks(edges_[id].b)) return false;
     return true;
   }
 
@@ -628,10 +620,10 @@ class Mesher {
     }
     auto try_new = [&](const Vector3d& x) {
       const Vector2d p = param_of(x, N_.params[a].x());
-      const auto jet = S_.evaluate(p.x(), p.y());
-      if (!jet) return false;
-      const Vector3d pos = jet->position;
-      if (!relaxed && jet->normal().dot(f.n) < 0.2) return false;
+      const auto sp = S_.point_normal(p.x(), p.y());
+      if (!sp) return false;
+      const Vector3d pos = sp->position;
+      if (!relaxed && sp->normal.dot(f.n) < 0.2) return false;
       if (!clear_of_front(pos, u, e, nr) || !visible(a, b, -1, pos, p, f, nr)) return false;
       if (min_angle(A, B, pos) < 0.35) return false;  // ~20 deg: never build a sliver
       const int c = N_.add(p, S_);
@@ -689,9 +681,8 @@ class Mesher {
   int phi_cells_ = 1;
   double phi_cell_ = 2 * M_PI;
   std::unordered_map<std::int64_t, std::vector<int>> param_grid_;  // (phi, h) cells
-  std::vector<int> wide_edges_;  // edges over more than kMaxParamCells cells
+  std::vector<int> wide_edges_;                // edges over more than kMaxParamCells cells
   std::vector<int> param_cols_, param_found_;  // scratch of param_bucket / gather_param
-  Near visible_near_;                          // scratch of visible()
   std::vector<int> pool_;
   std::priority_queue<std::pair<double, int>> heap_;
   std::vector<std::array<int, 3>> triangles_;

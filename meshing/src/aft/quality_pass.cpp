@@ -140,21 +140,23 @@ class Repair {
     std::sort(changed.begin(), changed.end());
     changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
     int hits = 0;
-    std::vector<int> near;
+    // The cell lists hold every triangle ever inserted there, often many times over (each
+    // Steiner-point move re-inserts its star), so they are de-duplicated with a stamp per
+    // triangle rather than by sorting (the sorts were the largest cost of the repair).
+    if (stamp_.size() < T_.size()) stamp_.resize(T_.size(), 0);
     for (int c : changed) {
-      near.clear();
+      ++stamp_epoch_;
       const auto b = cells_of(c);
       for (int x = b.min().x(); x <= b.max().x(); ++x)
         for (int y = b.min().y(); y <= b.max().y(); ++y)
           for (int z = b.min().z(); z <= b.max().z(); ++z)
             if (const auto it = grid_.find(cell_key(x, y, z)); it != grid_.end())
-              near.insert(near.end(), it->second.begin(), it->second.end());
-      std::sort(near.begin(), near.end());
-      near.erase(std::unique(near.begin(), near.end()), near.end());
-      for (int u : near)
-        if (u != c && u < static_cast<int>(T_.size()) && T_[u][0] >= 0 &&
-            triangles_intersect(S_.pos, T_[c], T_[u]))
-          ++hits;
+              for (int u : it->second) {
+                if (u == c || u >= static_cast<int>(T_.size()) || stamp_[u] == stamp_epoch_)
+                  continue;
+                stamp_[u] = stamp_epoch_;
+                if (T_[u][0] >= 0 && triangles_intersect(S_.pos, T_[c], T_[u])) ++hits;
+              }
     }
     return hits;
   }
@@ -559,6 +561,8 @@ class Repair {
   Journal journal_;
   double cell_ = 8.0;  // mm: 1.5 x the mean edge
   std::unordered_map<std::int64_t, std::vector<int>> grid_;
+  mutable std::vector<std::uint64_t> stamp_;  // new_intersections: last epoch a triangle was seen
+  mutable std::uint64_t stamp_epoch_ = 0;
 };
 
 }  // namespace

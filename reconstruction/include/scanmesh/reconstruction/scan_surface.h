@@ -31,6 +31,11 @@ struct SurfaceJet {
 
 SurfaceJet lift(double phi, double h, const RadiusJet& r);
 
+//! Position and unit outward normal (the same values as evaluate()'s position and normal()).
+struct SurfacePoint {
+  Eigen::Vector3d position, normal;
+};
+
 //! One root of a ray or segment with the surface.
 struct SurfaceHit {
   double t = 0;  //!< parameter along origin + t * direction
@@ -72,6 +77,8 @@ class ScanSurface {
   //! r alone (the same value as radius()->r, bit for bit), for root searches.
   std::optional<double> radius_value(double phi, double h) const;
   std::optional<SurfaceJet> evaluate(double phi, double h) const;
+  //! Position and normal only: first derivatives, about half the work of evaluate().
+  std::optional<SurfacePoint> point_normal(double phi, double h) const;
   std::optional<Eigen::Vector3d> position(double phi, double h) const;
 
   //! Derivatives at grid node (i, j) from central differences (exact for quadratics; the
@@ -118,6 +125,8 @@ class ScanSurface {
   // Grid coordinates: u in [0, n_phi), v in [0, n_h - 1].
   bool to_grid(double phi, double h, double& u, double& v) const;
   std::optional<double> implicit_value(const Eigen::Vector3d& x) const;
+  // radius() with or without the second derivatives (left 0 without).
+  std::optional<RadiusJet> radius_jet(double phi, double h, bool second_order) const;
   // The patch of (phi, h): corner (i, j) and the local coordinates; false where undefined.
   bool patch_at(double phi, double h, int& i, int& j, double& s, double& t) const;
   struct HermiteNode {
