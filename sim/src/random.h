@@ -61,7 +61,7 @@ inline const std::array<double, kNormalBins + 1>& normal_quantiles() {
 //! Standard normal from 64 random bits, several times cheaper than Box-Muller (no log, no cos):
 //! the top 12 bits pick one of 4096 equal-probability bins of N(0, 1), the next 32 bits a point
 //! in it by linear interpolation of the inverse CDF. The density is piecewise constant between
-//! the quantiles (within 1e-4 of N(0, 1) in every quantile). The two outer bins (|x| > 3.36)
+//! the quantiles (within 1e-4 of N(0, 1) in every quantile). The two outer bins (|x| > 3.49, p < 1/4096 each)
 //! are sampled exactly with Marsaglia's tail method, so the tails stay Gaussian. Used for the
 //! per-pixel sensor noise, where a frame draws three normals for each of its ~10^6 pixels.
 inline double gaussian_from_bits(std::uint64_t bits) {

@@ -590,7 +590,6 @@ Image8 TurntableCamera::render(double angle, unsigned laser_mask) const {
     // sums run serially in pixel order, so the frame is the same for any thread count.
     const double gain = rig_.bloom_fraction / ksum;
     for (std::size_t i = 0; i < n; ++i) {
-      if (!(laser[i] > 0.0f)) continue;
       const float e = base[3 * i] + laser[i] - 255.0f;
       if (!(e > 0.0f)) continue;
       const int x = static_cast<int>(i % w), y = static_cast<int>(i / w);
