@@ -190,7 +190,18 @@ int run_animesh(const AnimeshArgs& a) {
                              {"split", am.repair_operations[4]},
                              {"left_below_20_deg", am.repair_left_below_20},
                              {"forced_below_20_deg", am.repair_forced_below_20}};
-  j["time_s"] = {{"load_and_regions", t_load}, {"mesh", t_mesh}};
+  j["time_s"] = {{"load_and_regions", t_load},
+                 {"mesh", t_mesh},
+                 {"mesh_stages",
+                  {{"segments", am.seconds.segments},
+                   {"regions", am.seconds.regions},
+                   {"crossing_check", am.seconds.check}}},
+                 {"region_thread_seconds",
+                  {{"mesher", am.thread_seconds.regions},
+                   {"flips", am.thread_seconds.flips},
+                   {"smoothing", am.thread_seconds.smoothing},
+                   {"repair", am.thread_seconds.repair}}}};
+  j["serial_repair_fallback"] = am.serial_repair;
   j["quality"] = {{"min_angle_deg", q.min_angle_deg},
                   {"min_angle_away_from_sharp_junctions_deg", q.min_angle_non_exempt_deg},
                   {"exempt_triangles", q.small_angle_exempt},

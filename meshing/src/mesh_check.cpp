@@ -112,9 +112,7 @@ bool triangles_intersect(const std::vector<Vector3d>& P, const std::array<int, 3
   return false;
 }
 
-namespace {
-
-std::size_t count_self_intersections(const Mesh& mesh) {
+std::size_t count_intersecting_faces(const Mesh& mesh, const std::vector<int>* labels) {
   const auto& P = mesh.positions;
   const auto& F = mesh.triangles;
   if (F.size() < 2) return 0;
@@ -162,6 +160,7 @@ std::size_t count_self_intersections(const Mesh& mesh) {
     for (std::size_t i = 0; i < list.size(); ++i)
       for (std::size_t j = i + 1; j < list.size(); ++j) {
         const int f = list[i], g = list[j];
+        if (labels && (*labels)[f] == (*labels)[g]) continue;
         const Vector3d l = lo[f].cwiseMax(lo[g]), h = hi[f].cwiseMin(hi[g]);
         if ((l.array() > h.array()).any()) continue;
         // count the pair only in the cell holding the low corner of the box overlap
@@ -171,8 +170,6 @@ std::size_t count_self_intersections(const Mesh& mesh) {
   }
   return count;
 }
-
-}  // namespace
 
 double triangle_min_angle(const Vector3d& a, const Vector3d& b, const Vector3d& c) {
   auto at = [](const Vector3d& p, const Vector3d& q, const Vector3d& r) {
@@ -275,7 +272,7 @@ MeshCheckReport check_mesh(const Mesh& mesh, const MeshCheckOptions& options) {
     r.fraction_min_angle_ge_30 = static_cast<double>(good) / static_cast<double>(F.size());
   }
   if (options.self_intersections) {
-    r.self_intersections = count_self_intersections(mesh);
+    r.self_intersections = count_intersecting_faces(mesh);
     r.self_intersections_checked = true;
   }
   return r;

@@ -241,7 +241,8 @@ std::optional<SurfacePoint> ScanSurface::point_normal(double phi, double h) cons
   const Eigen::Vector3d radial(c, s, 0), tangential(-s, c, 0);
   const Eigen::Vector3d d_phi = r->r_phi * radial + r->r * tangential;
   const Eigen::Vector3d d_h = r->r_h * radial + Eigen::Vector3d::UnitZ();
-  return SurfacePoint{r->r * radial + Eigen::Vector3d(0, 0, h), d_phi.cross(d_h).normalized()};
+  return SurfacePoint{r->r * radial + Eigen::Vector3d(0, 0, h), d_phi.cross(d_h).normalized(),
+                      d_phi, d_h};
 }
 
 std::optional<Eigen::Vector3d> ScanSurface::position(double phi, double h) const {
@@ -386,7 +387,17 @@ std::vector<double> ScanSurface::intersect_circle(const Eigen::Vector3d& centre,
 
 std::optional<SurfaceProjection> ScanSurface::project(const Eigen::Vector3d& x) const {
   const Eigen::Vector3d c = to_cylindrical(x);
-  double phi = c.x(), h = c.y();
+  auto p = project(x, Eigen::Vector2d(c.x(), c.y()));
+  if (!p) return std::nullopt;
+  p->phi = std::fmod(p->phi, kTwoPi);
+  if (p->phi < 0) p->phi += kTwoPi;
+  return p;
+}
+
+std::optional<SurfaceProjection> ScanSurface::project(const Eigen::Vector3d& x,
+                                                      const Eigen::Vector2d& start) const {
+  double phi = start.x(), h = start.y();
+  const double rho = std::hypot(x.x(), x.y());
   for (int it = 0; it < 50; ++it) {
     // Gauss-Newton needs the position and the first derivatives only (lift() without the
     // second-order terms: the same values).
@@ -405,12 +416,10 @@ std::optional<SurfaceProjection> ScanSurface::project(const Eigen::Vector3d& x) 
         std::min(1.0, limit / std::max(std::abs(delta(0)) / dphi_, std::abs(delta(1)) / dh_));
     phi += scale * delta(0);
     h += scale * delta(1);
-    if (std::abs(delta(0)) * c.z() < 1e-9 && std::abs(delta(1)) < 1e-9) break;
+    if (std::abs(delta(0)) * rho < 1e-9 && std::abs(delta(1)) < 1e-9) break;
   }
   const auto p = position(phi, h);
   if (!p) return std::nullopt;
-  phi = std::fmod(phi, kTwoPi);
-  if (phi < 0) phi += kTwoPi;
   return SurfaceProjection{*p, phi, h, (*p - x).norm()};
 }
 

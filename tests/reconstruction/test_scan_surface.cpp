@@ -100,6 +100,8 @@ TEST(ScanSurface, CheapEvaluationsEqualTheFullJetBitForBitAndAreUndefinedWhereIt
       ASSERT_TRUE(full && cheap);
       ASSERT_EQ(full->position, cheap->position);
       ASSERT_EQ(full->normal(), cheap->normal);
+      ASSERT_EQ(full->d_phi, cheap->d_phi);
+      ASSERT_EQ(full->d_h, cheap->d_h);
       ASSERT_EQ(full->position, *surface.position(phi, h));
       ++compared;
     }

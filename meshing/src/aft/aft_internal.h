@@ -29,6 +29,26 @@ inline double angle_at(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
   return std::atan2(u.cross(v).norm(), u.dot(v));
 }
 
+//! The smallest angle of the triangle (a, b, c), in radians: the angle opposite the shortest
+//! side, so one atan2 instead of three (angle evaluations are a large share of the meshers' and
+//! the repair's work).
+inline double min_angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                        const Eigen::Vector3d& c) {
+  const double la = (b - c).squaredNorm(), lb = (c - a).squaredNorm(), lc = (a - b).squaredNorm();
+  if (la <= lb && la <= lc) return angle_at(a, b, c);
+  return lb <= lc ? angle_at(b, c, a) : angle_at(c, a, b);
+}
+
+//! The map from a tangent displacement at a surface point to the (phi, h) step that makes it,
+//! to first order: the pseudo-inverse of [dX/dphi, dX/dh]. Lifting param + M d lands on the
+//! surface within |d|^2 x curvature of the point + d, for the cost of one evaluation, where a
+//! projection of the point + d iterates.
+inline Eigen::Matrix<double, 2, 3> tangent_to_parameters(const SurfacePoint& at) {
+  Eigen::Matrix<double, 3, 2> jac;
+  jac << at.d_phi, at.d_h;
+  return (jac.transpose() * jac).inverse() * jac.transpose();
+}
+
 //! Every node of the animation mesh: (phi, h) and its point and normal on the surface.
 struct NodeStore {
   std::vector<Eigen::Vector2d> params;

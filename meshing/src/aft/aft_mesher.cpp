@@ -69,14 +69,6 @@ double point_segment_distance(const Vector3d& p, const Vector3d& a, const Vector
   return (a + t * ab - p).norm();
 }
 
-double min_angle(const Vector3d& a, const Vector3d& b, const Vector3d& c) {
-  auto ang = [](const Vector3d& p, const Vector3d& q, const Vector3d& r) {
-    const Vector3d u = q - p, v = r - p;
-    return std::atan2(u.cross(v).norm(), u.dot(v));
-  };
-  return std::min({ang(a, b, c), ang(b, c, a), ang(c, a, b)});
-}
-
 bool inside_polygons(const std::vector<std::vector<Vector2d>>& polys, const Vector2d& p0) {
   bool inside = false;
   for (const auto& poly : polys) {

@@ -54,14 +54,6 @@ using Point = Kernel::Point_2;
 
 constexpr double kMinAngle = 30.0 * M_PI / 180.0;  // Chew's bound
 
-double min_angle(const Vector3d& a, const Vector3d& b, const Vector3d& c) {
-  auto at = [](const Vector3d& p, const Vector3d& q, const Vector3d& r) {
-    const Vector3d u = q - p, v = r - p;
-    return std::atan2(u.cross(v).norm(), u.dot(v));
-  };
-  return std::min({at(a, b, c), at(b, c, a), at(c, a, b)});
-}
-
 //! Planar circumcentre of a 3D triangle and its radius; nullopt for a degenerate triangle.
 std::optional<std::pair<Vector3d, double>> circumcircle(const Vector3d& a, const Vector3d& b,
                                                         const Vector3d& c) {

@@ -55,6 +55,19 @@ TEST(MeshCheck, CrossingTrianglesWithoutSharedCornerIntersect) {
   EXPECT_EQ(check_mesh(m).self_intersections, 1u);
 }
 
+TEST(MeshCheck, LabelledCountSkipsPairsWithinOneLabel) {
+  // Two crossing pairs: faces 0-1 (labels 7 and 8) and faces 2-3 (both label 9), far apart.
+  Mesh m;
+  m.positions = {{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0.5, 0.5, -1}, {0.5, 0.5, 1}, {3, 3, 0}};
+  for (int k = 0; k < 6; ++k) m.positions.push_back(m.positions[k] + Eigen::Vector3d(50, 0, 0));
+  m.triangles = {{0, 1, 2}, {3, 4, 5}, {6, 7, 8}, {9, 10, 11}};
+  EXPECT_EQ(count_intersecting_faces(m), 2u);
+  const std::vector<int> labels{7, 8, 9, 9};
+  EXPECT_EQ(count_intersecting_faces(m, &labels), 1u);
+  const std::vector<int> one_label(4, 3);
+  EXPECT_EQ(count_intersecting_faces(m, &one_label), 0u);
+}
+
 TEST(MeshCheck, FoldThroughSharedCornerIntersects) {
   Mesh m;
   // both faces share vertex 0; the second one's far edge pierces the first face

@@ -31,9 +31,10 @@ struct SurfaceJet {
 
 SurfaceJet lift(double phi, double h, const RadiusJet& r);
 
-//! Position and unit outward normal (the same values as evaluate()'s position and normal()).
+//! Position, unit outward normal and the first derivatives dX/dphi, dX/dh (the same values as
+//! evaluate()'s position, normal() and d_phi, d_h).
 struct SurfacePoint {
-  Eigen::Vector3d position, normal;
+  Eigen::Vector3d position, normal, d_phi, d_h;
 };
 
 //! One root of a ray or segment with the surface.
@@ -104,6 +105,11 @@ class ScanSurface {
   //! Closest point by Gauss-Newton on (phi, h) from the radial projection of x; nullopt if
   //! the surface is not defined around x.
   std::optional<SurfaceProjection> project(const Eigen::Vector3d& x) const;
+  //! The same from a given start (phi, h) near the answer, e.g. the parameters of a surface
+  //! point next to x: fewer iterations, and no angle of x to compute. The returned phi is
+  //! unwrapped next to the start's, not reduced to [0, 2 pi).
+  std::optional<SurfaceProjection> project(const Eigen::Vector3d& x,
+                                           const Eigen::Vector2d& start) const;
 
   //! The implicit view F(x) = r(phi(x), h(x)) - rho(x) and its gradient.
   std::optional<ImplicitSample> implicit(const Eigen::Vector3d& x) const;

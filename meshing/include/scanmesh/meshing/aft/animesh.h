@@ -57,6 +57,16 @@ struct AnimationMesh {
   //! other, split), triangles left below 20 deg, of which at a sharp input corner.
   std::array<int, 5> repair_operations{};
   int repair_left_below_20 = 0, repair_forced_below_20 = 0;
+  //! True if a region's repair made a triangle cross another region's and the repair was done
+  //! again on the stitched mesh.
+  bool serial_repair = false;
+  //! Seconds, for reports and benchmarks (not part of the result). `seconds`: wall clock of
+  //! the segment nodes, of the regions (meshed, flipped, smoothed and repaired in parallel),
+  //! and of the check for crossings between regions. `thread_seconds`: the regions' stages
+  //! summed over the threads (regions = the meshers).
+  struct StageSeconds {
+    double segments = 0, regions = 0, flips = 0, smoothing = 0, repair = 0, check = 0;
+  } seconds, thread_seconds;
 };
 
 //! Meshes every region (openings stay empty) and stitches them: segment nodes appear once.
