@@ -14,6 +14,8 @@
 #include <map>
 #include <vector>
 
+#include <omp.h>
+
 #include "scanmesh/meshing/aft/animesh.h"
 #include "scanmesh/meshing/grid_mesh.h"
 #include "scanmesh/sim/range_scanner.h"
@@ -198,10 +200,7 @@ int main() {
               double(cgal_row.vertices) / aft_row.vertices, cgal_row.q.mean_q / aft_row.q.mean_q);
 
   // 3. AFT speed at a fine unit size (all units / 4).
-  aft::RegionSettings fine = settings;
-  fine.default_unit_mm /= 4;
-  for (auto& r : fine.regions)
-    if (r.unit_mm) *r.unit_mm /= 4;
+  aft::RegionSettings fine = settings.with_units_scaled(0.25);
   aft::RegionGraph gf = aft::analyze_regions(lines, surface);
   aft::apply_region_settings(gf, fine, surface);
   const auto t1 = std::chrono::steady_clock::now();
@@ -209,6 +208,12 @@ int main() {
   const double tf = seconds_since(t1);
   std::printf("AFT fine (units / 4): %zu triangles in %.3f s = %.0f triangles/s\n",
               amf.mesh.triangles.size(), tf, amf.mesh.triangles.size() / tf);
+  std::printf(
+      "  wall s: segments %.3f, regions %.3f (%d threads), crossing check "
+      "%.3f; thread s: mesher %.3f, flips %.3f, smoothing %.3f, repair %.3f%s\n",
+      amf.seconds.segments, amf.seconds.regions, omp_get_max_threads(), amf.seconds.check,
+      amf.thread_seconds.regions, amf.thread_seconds.flips, amf.thread_seconds.smoothing,
+      amf.thread_seconds.repair, amf.serial_repair ? " (serial repair fallback)" : "");
   print(Row{"AFT fine (units / 4)", tf, amf.mesh.positions.size(), amf.mesh.triangles.size(),
             aft::evaluate_quality(amf, surface, 4)});
   fine.repair_rounds = 0;

@@ -159,4 +159,12 @@ void apply_region_settings(RegionGraph& g, const RegionSettings& s, const ScanSu
   }
 }
 
+RegionSettings RegionSettings::with_units_scaled(double factor) const {
+  RegionSettings scaled = *this;
+  scaled.default_unit_mm *= factor;
+  for (RegionRule& rule : scaled.regions)
+    if (rule.unit_mm) *rule.unit_mm *= factor;
+  return scaled;
+}
+
 }  // namespace scanmesh::aft

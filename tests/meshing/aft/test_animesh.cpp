@@ -162,10 +162,7 @@ TEST(AnimationMeshHead, HalfTheUnitsStillClosesEveryFrontWithoutIntersections) {
   const ScanSurface& surface = head.surface;
   const LineSet& lines = head.lines;
   RegionGraph g = analyze_regions(lines, surface);
-  RegionSettings s = head.settings;
-  s.default_unit_mm /= 2;
-  for (auto& r : s.regions)
-    if (r.unit_mm) *r.unit_mm /= 2;
+  const RegionSettings s = head.settings.with_units_scaled(0.5);
   apply_region_settings(g, s, surface);
   const AnimationMesh am = build_animation_mesh(g, lines, surface, s);
   int open_edges = 0;

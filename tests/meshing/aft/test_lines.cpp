@@ -119,6 +119,13 @@ regions:
   EXPECT_EQ(s.strategy, EdgeStrategy::Random);
   ASSERT_EQ(s.regions.size(), 1u);
   EXPECT_DOUBLE_EQ(*s.regions[0].unit_mm, 2.5);
+  // Scaling changes every unit size and nothing else.
+  const RegionSettings fine = s.with_units_scaled(0.25);
+  EXPECT_DOUBLE_EQ(fine.default_unit_mm, 1.25);
+  EXPECT_DOUBLE_EQ(*fine.regions[0].unit_mm, 0.625);
+  EXPECT_DOUBLE_EQ(fine.min_unit_mm, s.min_unit_mm);
+  EXPECT_EQ(fine.seed, 7u);
+  EXPECT_EQ(fine.regions[0].name, "nose");
   EXPECT_NO_THROW(parse_region_settings(R"({"unit_mm": 4, "regions": []})", "r.json"));
   EXPECT_THROW(parse_region_settings("unit_mm: -1", "r.yaml"), FileFormatError);
   EXPECT_THROW(parse_region_settings("bogus: 1", "r.yaml"), FileFormatError);

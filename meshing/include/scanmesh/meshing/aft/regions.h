@@ -96,6 +96,10 @@ struct RegionSettings {
   int repair_rounds = 8;              //!< small-angle repair sweeps (0: off)
   std::uint64_t seed = 1;
   std::vector<RegionRule> regions;
+
+  //! The same settings with every unit size (the default and each rule's) times `factor`, e.g.
+  //! 0.25 for a mesh four times finer; the adaptive lower bound min_unit_mm is kept.
+  RegionSettings with_units_scaled(double factor) const;
 };
 
 //! YAML (or JSON, a subset of YAML) region settings (docs/formats.md, "Region settings").
