@@ -22,6 +22,13 @@ inline std::uint64_t ukey(int a, int b) {
   return (static_cast<std::uint64_t>(a) << 32) | static_cast<std::uint32_t>(b);
 }
 
+//! std::remainder(d, 2 pi), the angle difference d wrapped into [-pi, pi], bit for bit, with the
+//! common case |d| <= pi (where the answer is d) first: remainder's rounding-mode bookkeeping
+//! made it ~7 % of the advancing front's time.
+inline double wrap_angle(double d) {
+  return std::fabs(d) <= M_PI ? d : std::remainder(d, 2 * M_PI);
+}
+
 //! The angle at p of the triangle (p, q, r), in radians.
 inline double angle_at(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
                        const Eigen::Vector3d& r) {

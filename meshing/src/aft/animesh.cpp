@@ -18,6 +18,7 @@ namespace scanmesh::aft {
 using detail::angle_at;
 using detail::min_angle;
 using detail::ukey;
+using detail::wrap_angle;
 using Eigen::Vector2d;
 using Eigen::Vector3d;
 
@@ -239,8 +240,7 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
         if (!he.forward) std::reverse(chain.begin(), chain.end());
         for (std::size_t k = 0; k + 1 < chain.size(); ++k) {
           Vector2d p = seg.params[chain[k]];
-          if (!poly.empty())
-            p.x() = poly.back().x() + std::remainder(p.x() - poly.back().x(), 2 * M_PI);
+          if (!poly.empty()) p.x() = poly.back().x() + wrap_angle(p.x() - poly.back().x());
           poly.push_back(p);
         }
       }

@@ -261,7 +261,7 @@ class Repair {
     const Vector2d& a = S_.params[f[0]];
     auto rel = [&](int v) {
       const Vector2d& p = S_.params[v];
-      return Vector2d(std::remainder(p.x() - a.x(), 2 * M_PI), p.y() - a.y());
+      return Vector2d(wrap_angle(p.x() - a.x()), p.y() - a.y());
     };
     const double rho = std::max(1e-6, std::hypot(S_.pos[f[0]].x(), S_.pos[f[0]].y()));
     const Vector2d b = rel(f[1]), c = rel(f[2]);

@@ -99,7 +99,7 @@ class SurfaceDelaunayMesher {
     for (const auto& poly : in_.polygons) {
       double winding = 0;  // total phi travelled around the closed polygon
       for (std::size_t i = 0; i < poly.size(); ++i)
-        winding += std::remainder(poly[(i + 1) % poly.size()].x() - poly[i].x(), 2 * M_PI);
+        winding += wrap_angle(poly[(i + 1) % poly.size()].x() - poly[i].x());
       if (std::abs(winding) > M_PI) return false;  // goes once around the axis
     }
     double radius_sum = 0;
@@ -114,7 +114,7 @@ class SurfaceDelaunayMesher {
   }
 
   Vector2d unwrapped(const Vector2d& param) const {
-    return {phi_ref_ + std::remainder(param.x() - phi_ref_, 2 * M_PI), param.y()};
+    return {phi_ref_ + wrap_angle(param.x() - phi_ref_), param.y()};
   }
   Point plane_point(const Vector2d& param) const {
     const Vector2d u = unwrapped(param);
@@ -135,7 +135,7 @@ class SurfaceDelaunayMesher {
       for (const Vector2d& q : poly) p.push_back(unwrapped(q));
       // keep each polygon continuous (a region narrower than pi never needs more)
       for (std::size_t i = 1; i < p.size(); ++i)
-        p[i].x() = p[i - 1].x() + std::remainder(p[i].x() - p[i - 1].x(), 2 * M_PI);
+        p[i].x() = p[i - 1].x() + wrap_angle(p[i].x() - p[i - 1].x());
       polygons_.push_back(std::move(p));
     }
     try {

@@ -73,8 +73,8 @@ TwoWayDistance sampled_hausdorff(const AnimationMesh& am, const ScanSurface& sur
     const auto& f = T[t];
     // (phi, h) of the corners, unwrapped next to the first: the triangle's footprint.
     Eigen::Vector2d pa = am.params[f[0]], pb = am.params[f[1]], pc = am.params[f[2]];
-    pb.x() = pa.x() + std::remainder(pb.x() - pa.x(), 2 * M_PI);
-    pc.x() = pa.x() + std::remainder(pc.x() - pa.x(), 2 * M_PI);
+    pb.x() = pa.x() + wrap_angle(pb.x() - pa.x());
+    pc.x() = pa.x() + wrap_angle(pc.x() - pa.x());
     for (int i = 0; i <= n; ++i)
       for (int j = 0; i + j <= n; ++j) {
         const double u = double(i) / n, v = double(j) / n, w = 1 - u - v;
