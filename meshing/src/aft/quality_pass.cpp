@@ -9,8 +9,10 @@
 // re-lifted through (phi, h)), so it stays on the scan surface.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <set>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "aft_internal.h"
 #include "scanmesh/meshing/mesh_check.h"
@@ -398,6 +400,12 @@ class Repair {
     if (!steiner(v) || vt_[v].empty()) return;
     double cur = vertex_min(v);
     if (cur >= kSettledAngle) return;
+    // The 15 candidates of a bad triangle optimise overlapping vertex sets, mostly around stars
+    // the candidate left as they were; a search from a star state that already gave no move
+    // gives none again (the search is a function of that state), so it is skipped.
+    const std::uint64_t state = star_state(v);
+    if (stuck_states_.count(state)) return;
+    bool moved = false;
     double len = 0;
     const auto nb = neighbours(v);
     for (int w : nb) len += (S_.pos[w] - S_.pos[v]).norm();
@@ -428,10 +436,38 @@ class Repair {
       }
       if (best > cur + 1e-9 && move_vertex(v, best_p)) {
         cur = best;
+        moved = true;
       } else {
         step *= 0.5;
       }
     }
+    if (!moved) stuck_states_.insert(state);
+  }
+
+  // A hash of everything optimise(v) reads: v's parameters, point and normal, and every
+  // triangle of its star with its corners' parameters and points (summed per triangle, so the
+  // order of the star list does not matter).
+  std::uint64_t star_state(int v) const {
+    const auto mix = [](std::uint64_t h, double x) {
+      std::uint64_t bits;
+      std::memcpy(&bits, &x, sizeof bits);
+      h ^= bits + 0x9E3779B97F4A7C15ull + (h << 6) + (h >> 2);
+      return h * 0xBF58476D1CE4E5B9ull;
+    };
+    const auto vertex = [&](std::uint64_t h, int w) {
+      h = mix(h, static_cast<double>(w));
+      h = mix(mix(h, S_.params[w].x()), S_.params[w].y());
+      return mix(mix(mix(h, S_.pos[w].x()), S_.pos[w].y()), S_.pos[w].z());
+    };
+    std::uint64_t h = vertex(0x1234567ull, v);
+    h = mix(mix(mix(h, S_.normal[v].x()), S_.normal[v].y()), S_.normal[v].z());
+    std::uint64_t star = 0;
+    for (int t : vt_[v]) {
+      std::uint64_t ht = 0x51ED27ull;
+      for (int w : T_[t]) ht = vertex(ht, w);
+      star += ht;
+    }
+    return mix(h, static_cast<double>(star >> 11)) ^ star;
   }
 
   void optimise_all(const std::vector<int>& vs) {
@@ -594,6 +630,7 @@ class Repair {
   Journal journal_;
   double cell_ = 8.0;  // mm: 1.5 x the mean edge
   std::unordered_map<std::int64_t, std::vector<int>> grid_;
+  std::unordered_set<std::uint64_t> stuck_states_;  // optimise: star states that gave no move
   mutable std::vector<std::uint64_t> stamp_;  // new_intersections: last epoch a triangle was seen
   mutable std::uint64_t stamp_epoch_ = 0;
 };
