@@ -220,11 +220,12 @@ bool low_contrast(const cv::Mat& gray) {
 // it rejected 4 of those 60 views. Views are searched in parallel.
 std::optional<std::vector<cv::Point2f>> detect_chessboard(const cv::Mat& gray,
                                                           const cv::Size& pattern_size) {
-  std::vector<int> cascade = {0, cv::CALIB_CB_ADAPTIVE_THRESH};
-  if (low_contrast(gray))
-    cascade.push_back(cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
+  const int cascade[] = {0, cv::CALIB_CB_ADAPTIVE_THRESH,
+                         cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE};
   std::vector<cv::Point2f> corners;
   for (int flags : cascade) {
+    // The contrast histogram only when the last step is reached (most views stop at the first).
+    if ((flags & cv::CALIB_CB_NORMALIZE_IMAGE) && !low_contrast(gray)) break;
     if (!cv::findChessboardCorners(gray, pattern_size, corners, flags)) continue;
     cv::cornerSubPix(gray, corners, cv::Size(7, 7), cv::Size(-1, -1),
                      cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 100, 1e-4));
