@@ -213,7 +213,7 @@ int main() {
       "%.3f; thread s: mesher %.3f, flips %.3f, smoothing %.3f, repair %.3f%s\n",
       amf.seconds.segments, amf.seconds.regions, omp_get_max_threads(), amf.seconds.check,
       amf.thread_seconds.regions, amf.thread_seconds.flips, amf.thread_seconds.smoothing,
-      amf.thread_seconds.repair, amf.serial_repair ? " (serial repair fallback)" : "");
+      amf.thread_seconds.repair, amf.serial_postprocessing ? " (serial fallback)" : "");
   print(Row{"AFT fine (units / 4)", tf, amf.mesh.positions.size(), amf.mesh.triangles.size(),
             aft::evaluate_quality(amf, surface, 4)});
   fine.repair_rounds = 0;

@@ -201,7 +201,7 @@ int run_animesh(const AnimeshArgs& a) {
                    {"flips", am.thread_seconds.flips},
                    {"smoothing", am.thread_seconds.smoothing},
                    {"repair", am.thread_seconds.repair}}}};
-  j["serial_repair_fallback"] = am.serial_repair;
+  j["serial_postprocessing_fallback"] = am.serial_postprocessing;
   j["quality"] = {{"min_angle_deg", q.min_angle_deg},
                   {"min_angle_away_from_sharp_junctions_deg", q.min_angle_non_exempt_deg},
                   {"exempt_triangles", q.small_angle_exempt},

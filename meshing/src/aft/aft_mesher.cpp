@@ -98,12 +98,10 @@ class RegionPolygons {
       polys_.push_back(std::move(ix));
     }
   }
-  bool empty() const { return polys_.empty(); }
-
   bool contains(const Vector2d& p0) const {
     bool inside = false;
     for (const Indexed& ix : polys_) {
-      if (p0.y() < ix.ymin || p0.y() > ix.ymax) continue;  // no edge straddles: parity 0
+      if (!(p0.y() >= ix.ymin && p0.y() <= ix.ymax)) continue;  // nothing straddles (or NaN)
       const auto& poly = *ix.poly;
       const auto& edges = ix.bands[band(ix, p0.y())];
       Vector2d q = p0;
@@ -422,7 +420,7 @@ class Mesher {
     const double scale = (B - A).norm();
     const double eps = 1e-9 * scale * scale;
     if (cross2(B - A, C - A) <= eps) return false;
-    if (!region_.empty()) {
+    if (!in_.polygons.empty()) {  // (polygons of < 3 nodes contain nothing)
       const Vector2d cen(pf.origin.x() + (A.x() + B.x() + C.x()) / (3 * pf.rho),
                          pf.origin.y() + (A.y() + B.y() + C.y()) / 3);
       if (!region_.contains(cen)) return false;

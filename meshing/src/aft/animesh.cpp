@@ -184,6 +184,18 @@ std::size_t region_crossings(const std::vector<std::array<int, 3>>& tris,
   return count_intersecting_faces(mesh, &labels);
 }
 
+// Edges with more than two triangles (a region's flip or collapse made an edge between two
+// segment nodes that another region has too).
+std::size_t overfull_edges(const std::vector<std::array<int, 3>>& tris) {
+  std::unordered_map<std::uint64_t, int> count;
+  count.reserve(2 * tris.size());
+  for (const auto& f : tris)
+    for (int k = 0; k < 3; ++k) ++count[ukey(f[k], f[(k + 1) % 3])];
+  std::size_t n = 0;
+  for (const auto& [key, c] : count) n += c > 2;
+  return n;
+}
+
 }  // namespace
 
 AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
@@ -214,9 +226,9 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
     std::vector<std::array<int, 3>> tris;
     int flips = 0;
     detail::RepairStats repair;
-    // The region before the repair, for the serial fallback (see below).
-    detail::NodeStore nodes_before_repair;
-    std::vector<std::array<int, 3>> tris_before_repair;
+    // The region as the mesher left it, for the serial fallback (see below).
+    detail::NodeStore nodes_meshed;
+    std::vector<std::array<int, 3>> tris_meshed;
     AnimationMesh::StageSeconds thread_seconds;
   };
   std::vector<RegionJob> jobs;
@@ -273,31 +285,48 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
                                        20.5 * M_PI / 180, 20.0 * M_PI / 180,
                                        settings.repair_rounds);
   };
-  // The flips, the smoothing and the repair of one region, in its job. None of them crosses a
-  // region border: flips never flip a constraint edge (every border is one), and only Steiner
-  // points move, whose stars lie in their region. So this is the mesh the same stages give on
-  // the stitched mesh (the smoothing's Gauss-Seidel order and the flips' key order are kept:
-  // the job's numbering is the stitched one shifted) but for one thing: the repair tests a
-  // changed triangle against the triangles of its own region only, so the stitched mesh is
-  // checked for crossings between regions after the merge.
-  const auto postprocess_region = [&](RegionJob& job) {
+  // Flips, tangential smoothing of the Steiner points (towards the neighbours' centroid, on the
+  // surface, kept only if the smallest incident angle grows), flips again, and the small-angle
+  // repair: of one region in its job, or of the stitched mesh in the fallback below.
+  struct PostResult {
+    int flips = 0;
+    detail::RepairStats repair;
+    AnimationMesh::StageSeconds seconds;
+  };
+  const auto postprocess = [&](std::vector<std::array<int, 3>>& tris, std::vector<int>& labels,
+                               detail::NodeStore& nodes) {
+    PostResult out;
     auto t0 = Clock::now();
-    job.flips = delaunay_flips(job.tris, job.nodes.pos, job.nodes.normal, constraint);
-    job.thread_seconds.flips = seconds_since(t0);
+    out.flips = delaunay_flips(tris, nodes.pos, nodes.normal, constraint);
+    out.seconds.flips = seconds_since(t0);
     t0 = Clock::now();
-    // Tangential smoothing of Steiner points: towards the neighbours' centroid, on the surface,
-    // kept only if the smallest incident angle grows.
-    smooth_steiner_points(job.tris, job.nodes, surface, boundary_nodes, settings.smooth_iterations);
-    job.thread_seconds.smoothing = seconds_since(t0);
+    smooth_steiner_points(tris, nodes, surface, boundary_nodes, settings.smooth_iterations);
+    out.seconds.smoothing = seconds_since(t0);
     t0 = Clock::now();
-    job.flips += delaunay_flips(job.tris, job.nodes.pos, job.nodes.normal, constraint);
-    job.thread_seconds.flips += seconds_since(t0);
+    out.flips += delaunay_flips(tris, nodes.pos, nodes.normal, constraint);
+    out.seconds.flips += seconds_since(t0);
     t0 = Clock::now();
-    job.nodes_before_repair = job.nodes;
-    job.tris_before_repair = job.tris;
+    out.repair = repair(tris, labels, nodes);
+    out.seconds.repair = seconds_since(t0);
+    return out;
+  };
+  // Per region, none of these stages crosses a region border: flips never flip a constraint
+  // edge (every border is one), and only Steiner points move, whose stars lie in their region.
+  // The job's numbering is the stitched one shifted, so the smoothing's Gauss-Seidel order and
+  // the flips' key order are kept. What a region does not see is the others' triangles: the
+  // repair tests a changed triangle for crossings against its own region only, and a flip or
+  // collapse cannot know that the edge it makes between two segment nodes exists in another
+  // region. Both are checked on the stitched mesh (below).
+  const auto postprocess_region = [&](RegionJob& job) {
+    job.nodes_meshed = job.nodes;
+    job.tris_meshed = job.tris;
     std::vector<int> labels(job.tris.size(), job.region);
-    job.repair = repair(job.tris, labels, job.nodes);
-    job.thread_seconds.repair = seconds_since(t0);
+    const PostResult r = postprocess(job.tris, labels, job.nodes);
+    job.flips = r.flips;
+    job.repair = r.repair;
+    job.thread_seconds.flips = r.seconds.flips;
+    job.thread_seconds.smoothing = r.seconds.smoothing;
+    job.thread_seconds.repair = r.seconds.repair;
   };
   std::vector<std::exception_ptr> errors(jobs.size());
 #pragma omp parallel for schedule(dynamic, 1)
@@ -316,7 +345,12 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
         region_tris = detail::aft_mesh_region(job.nodes, surface, job.in, job.stats);
       job.tris = std::move(*region_tris);
       job.thread_seconds.regions = seconds_since(job_start);
-      postprocess_region(job);
+      if (settings.parallel_postprocessing) {
+        postprocess_region(job);
+      } else {
+        job.nodes_meshed = job.nodes;
+        job.tris_meshed = job.tris;
+      }
     } catch (...) {
       errors[order[k]] = std::current_exception();
     }
@@ -324,18 +358,18 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
   for (const auto& e : errors)
     if (e) std::rethrow_exception(e);
   // Stitching: the Steiner points appended region by region.
-  const auto stitch = [&](bool before_repair, detail::NodeStore& nodes,
+  const auto stitch = [&](bool as_meshed, detail::NodeStore& nodes,
                           std::vector<std::array<int, 3>>& tris, std::vector<int>& labels) {
     nodes = store;
     for (const RegionJob& job : jobs) {
-      const detail::NodeStore& jn = before_repair ? job.nodes_before_repair : job.nodes;
+      const detail::NodeStore& jn = as_meshed ? job.nodes_meshed : job.nodes;
       const int offset = static_cast<int>(nodes.pos.size() - boundary_nodes);
       for (std::size_t v = boundary_nodes; v < jn.pos.size(); ++v) {
         nodes.params.push_back(jn.params[v]);
         nodes.pos.push_back(jn.pos[v]);
         nodes.normal.push_back(jn.normal[v]);
       }
-      for (auto t : before_repair ? job.tris_before_repair : job.tris) {
+      for (auto t : as_meshed ? job.tris_meshed : job.tris) {
         for (int& v : t)
           if (v >= static_cast<int>(boundary_nodes)) v += offset;
         tris.push_back(t);
@@ -360,25 +394,29 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
   }
   am.seconds.regions = seconds_since(stage_start);
   stage_start = Clock::now();
-  // The regions' repairs did not see each other. If one made a triangle cross another
-  // region's (none has in the sample head at any unit size tried), the repair is done again
-  // on the stitched mesh from the state before it, where every changed triangle is tested
-  // against all triangles.
+  // The regions did not see each other (above). If the stitched mesh has an edge with more
+  // than two triangles, or more crossings between regions than the meshers left, the flips,
+  // smoothing and repair are done again on the stitched mesh as the meshers left it, where every
+  // edge and every changed triangle is tested against the whole mesh. (Neither has happened on
+  // the sample head at any unit size tried.)
   const std::size_t crossings = region_crossings(tris, labels, stitched.pos);
-  if (crossings > 0) {
-    detail::NodeStore before;
-    std::vector<std::array<int, 3>> tris_before;
-    std::vector<int> labels_before;
-    stitch(true, before, tris_before, labels_before);
-    if (crossings > region_crossings(tris_before, labels_before, before.pos)) {
-      const detail::RepairStats rs = repair(tris_before, labels_before, before);
-      am.repair_operations = rs.operations;
-      am.repair_left_below_20 = rs.left_below_goal;
-      am.repair_forced_below_20 = rs.forced_below_goal;
-      am.serial_repair = true;
-      stitched = std::move(before);
-      tris = std::move(tris_before);
-      labels = std::move(labels_before);
+  const std::size_t shared_edges = overfull_edges(tris);
+  if (!settings.parallel_postprocessing || crossings > 0 || shared_edges > 0) {
+    detail::NodeStore meshed;
+    std::vector<std::array<int, 3>> tris_meshed;
+    std::vector<int> labels_meshed;
+    stitch(true, meshed, tris_meshed, labels_meshed);
+    if (!settings.parallel_postprocessing || shared_edges > 0 ||
+        crossings > region_crossings(tris_meshed, labels_meshed, meshed.pos)) {
+      const PostResult r = postprocess(tris_meshed, labels_meshed, meshed);
+      am.flips = r.flips;
+      am.repair_operations = r.repair.operations;
+      am.repair_left_below_20 = r.repair.left_below_goal;
+      am.repair_forced_below_20 = r.repair.forced_below_goal;
+      am.serial_postprocessing = true;
+      stitched = std::move(meshed);
+      tris = std::move(tris_meshed);
+      labels = std::move(labels_meshed);
     }
   }
   am.seconds.check = seconds_since(stage_start);

@@ -86,6 +86,10 @@ RegionSettings parse_region_settings(std::string_view source, const std::string&
         (key == "relax_iterations"    ? s.relax_iterations
          : key == "smooth_iterations" ? s.smooth_iterations
                                       : s.repair_rounds) = n;
+      } else if (key == "parallel_postprocessing") {
+        if (!v.IsScalar() || (v.Scalar() != "true" && v.Scalar() != "false"))
+          throw FileFormatError(file, "parallel_postprocessing must be true or false");
+        s.parallel_postprocessing = v.Scalar() == "true";
       } else if (key == "seed") {
         s.seed = v.as<std::uint64_t>();
       } else if (key == "regions") {

@@ -49,9 +49,9 @@ class HostileLines : public ::testing::Test {
 
 TEST_F(HostileLines, ZeroAreaPolygonsGiveNoRegion) {
   // All corners on one line, and a polygon whose corners coincide.
-  for (const std::string body : {"<polygon points='50,50 100,50 150,50'/>",
-                                 "<polygon points='60,60 60,60 60,60 60,60'/>",
-                                 "<polygon points='50,50 150,50 50,50 150,50'/>"}) {
+  for (const std::string body :
+       {"<polygon points='50,50 100,50 150,50'/>", "<polygon points='60,60 60,60 60,60 60,60'/>",
+        "<polygon points='50,50 150,50 50,50 150,50'/>"}) {
     SCOPED_TRACE(body);
     const auto g = analyze_or_reject(body);
     if (g) {
@@ -111,12 +111,11 @@ TEST_F(HostileLines, SquareWithAnEdgeOnTheSeamMeshesOnBothSidesOfIt) {
 }
 
 TEST_F(HostileLines, RepeatedAndOverlappingLinesAreRejectedOrMerged) {
-  for (const std::string body :
-       {"<path d='M 10 20 L 100 20'/><path d='M 10 20 L 100 20'/>",
-        "<path d='M 10 20 L 100 20'/><path d='M 50 20 L 150 20'/>",
-        "<polygon points='50,50 100,50 100,100 50,100'/>"
-        "<polygon points='50,50 100,50 100,100 50,100'/>",
-        "<path d='M 10 30 L 100 30 L 10 30'/>"}) {
+  for (const std::string body : {"<path d='M 10 20 L 100 20'/><path d='M 10 20 L 100 20'/>",
+                                 "<path d='M 10 20 L 100 20'/><path d='M 50 20 L 150 20'/>",
+                                 "<polygon points='50,50 100,50 100,100 50,100'/>"
+                                 "<polygon points='50,50 100,50 100,100 50,100'/>",
+                                 "<path d='M 10 30 L 100 30 L 10 30'/>"}) {
     SCOPED_TRACE(body);
     const auto g = analyze_or_reject(body);
     if (g) expect_sound(*g);
@@ -126,8 +125,8 @@ TEST_F(HostileLines, RepeatedAndOverlappingLinesAreRejectedOrMerged) {
 TEST_F(HostileLines, NonFiniteAndEmptyInputsAreRejectedNamingTheFile) {
   for (const std::string body :
        {"<path d='M nan 20 L 100 20'/>", "<path d='M 10 inf L 100 20'/>",
-        "<polygon points='1e400,5 10,10 20,20'/>", "<path d='M 10 20 L 1e308 20'/>",
-        "<path d=''/>", "<polygon points=''/>", ""}) {
+        "<polygon points='1e400,5 10,10 20,20'/>", "<path d='M 10 20 L 1e308 20'/>", "<path d=''/>",
+        "<polygon points=''/>", ""}) {
     SCOPED_TRACE(body);
     const auto g = analyze_or_reject(body);
     if (g) {

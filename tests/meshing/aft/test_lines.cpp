@@ -116,6 +116,10 @@ regions:
   EXPECT_DOUBLE_EQ(s.default_unit_mm, 5);
   EXPECT_EQ(s.repair_rounds, 0);
   EXPECT_THROW(parse_region_settings("repair_rounds: -2", "r.yaml"), FileFormatError);
+  EXPECT_TRUE(s.parallel_postprocessing);
+  EXPECT_FALSE(
+      parse_region_settings("parallel_postprocessing: false", "r.yaml").parallel_postprocessing);
+  EXPECT_THROW(parse_region_settings("parallel_postprocessing: maybe", "r.yaml"), FileFormatError);
   EXPECT_EQ(s.strategy, EdgeStrategy::Random);
   ASSERT_EQ(s.regions.size(), 1u);
   EXPECT_DOUBLE_EQ(*s.regions[0].unit_mm, 2.5);

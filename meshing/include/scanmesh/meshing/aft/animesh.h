@@ -57,9 +57,10 @@ struct AnimationMesh {
   //! other, split), triangles left below 20 deg, of which at a sharp input corner.
   std::array<int, 5> repair_operations{};
   int repair_left_below_20 = 0, repair_forced_below_20 = 0;
-  //! True if a region's repair made a triangle cross another region's and the repair was done
-  //! again on the stitched mesh.
-  bool serial_repair = false;
+  //! True if the flips, smoothing and repair ran on the stitched mesh: because the settings ask
+  //! for it, or because the regions' own ones made an edge with more than two triangles or a
+  //! crossing between regions (the fallback).
+  bool serial_postprocessing = false;
   //! Seconds, for reports and benchmarks (not part of the result). `seconds`: wall clock of
   //! the segment nodes, of the regions (meshed, flipped, smoothed and repaired in parallel),
   //! and of the check for crossings between regions. `thread_seconds`: the regions' stages

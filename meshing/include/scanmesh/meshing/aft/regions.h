@@ -94,6 +94,9 @@ struct RegionSettings {
   int relax_iterations = 30;          //!< segment nodes "on rails"
   int smooth_iterations = 3;          //!< tangential smoothing of Steiner points
   int repair_rounds = 8;              //!< small-angle repair sweeps (0: off)
+  //! Flips, smoothing and repair per region in the parallel jobs (false: on the stitched mesh,
+  //! serially, as the fallback does; docs/animation-meshes.md).
+  bool parallel_postprocessing = true;
   std::uint64_t seed = 1;
   std::vector<RegionRule> regions;
 
