@@ -414,6 +414,9 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
       am.repair_left_below_20 = r.repair.left_below_goal;
       am.repair_forced_below_20 = r.repair.forced_below_goal;
       am.serial_postprocessing = true;
+      am.seconds.flips = r.seconds.flips;
+      am.seconds.smoothing = r.seconds.smoothing;
+      am.seconds.repair = r.seconds.repair;
       stitched = std::move(meshed);
       tris = std::move(tris_meshed);
       labels = std::move(labels_meshed);

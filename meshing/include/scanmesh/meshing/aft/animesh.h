@@ -63,7 +63,8 @@ struct AnimationMesh {
   bool serial_postprocessing = false;
   //! Seconds, for reports and benchmarks (not part of the result). `seconds`: wall clock of
   //! the segment nodes, of the regions (meshed, flipped, smoothed and repaired in parallel),
-  //! and of the check for crossings between regions. `thread_seconds`: the regions' stages
+  //! of the check for crossings between regions (including a serial post-processing), and of
+  //! the serial flips, smoothing and repair if they ran. `thread_seconds`: the regions' stages
   //! summed over the threads (regions = the meshers).
   struct StageSeconds {
     double segments = 0, regions = 0, flips = 0, smoothing = 0, repair = 0, check = 0;
