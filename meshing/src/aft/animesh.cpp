@@ -12,6 +12,7 @@
 #include "aft_internal.h"
 #include "scanmesh/core/errors.h"
 #include "scanmesh/meshing/mesh_check.h"
+#include "scanmesh/meshing/mesh_topology.h"
 
 namespace scanmesh::aft {
 
@@ -175,25 +176,19 @@ void smooth_steiner_points(const std::vector<std::array<int, 3>>& tris, detail::
     }
 }
 
-// Pairs of triangles of different regions that cross (more than sharing a corner or an edge).
-std::size_t region_crossings(const std::vector<std::array<int, 3>>& tris,
+// What a region's own post-processing cannot see, counted on the stitched mesh: pairs of
+// triangles of different regions that cross (more than sharing a corner or an edge), and edges
+// with more than two triangles (a flip or collapse made an edge between two segment nodes that
+// another region has too).
+struct StitchDefects {
+  std::size_t crossings = 0, overfull_edges = 0;
+};
+StitchDefects stitch_defects(const std::vector<std::array<int, 3>>& tris,
                              const std::vector<int>& labels, const std::vector<Vector3d>& pos) {
   Mesh mesh;
   mesh.positions = pos;
   mesh.triangles = tris;
-  return count_intersecting_faces(mesh, &labels);
-}
-
-// Edges with more than two triangles (a region's flip or collapse made an edge between two
-// segment nodes that another region has too).
-std::size_t overfull_edges(const std::vector<std::array<int, 3>>& tris) {
-  std::unordered_map<std::uint64_t, int> count;
-  count.reserve(2 * tris.size());
-  for (const auto& f : tris)
-    for (int k = 0; k < 3; ++k) ++count[ukey(f[k], f[(k + 1) % 3])];
-  std::size_t n = 0;
-  for (const auto& [key, c] : count) n += c > 2;
-  return n;
+  return {count_intersecting_faces(mesh, &labels), topology_stats(mesh).nonmanifold_edges};
 }
 
 }  // namespace
@@ -399,15 +394,14 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
   // smoothing and repair are done again on the stitched mesh as the meshers left it, where every
   // edge and every changed triangle is tested against the whole mesh. (Neither has happened on
   // the sample head at any unit size tried.)
-  const std::size_t crossings = region_crossings(tris, labels, stitched.pos);
-  const std::size_t shared_edges = overfull_edges(tris);
-  if (!settings.parallel_postprocessing || crossings > 0 || shared_edges > 0) {
+  const StitchDefects defects = stitch_defects(tris, labels, stitched.pos);
+  if (!settings.parallel_postprocessing || defects.crossings > 0 || defects.overfull_edges > 0) {
     detail::NodeStore meshed;
     std::vector<std::array<int, 3>> tris_meshed;
     std::vector<int> labels_meshed;
     stitch(true, meshed, tris_meshed, labels_meshed);
-    if (!settings.parallel_postprocessing || shared_edges > 0 ||
-        crossings > region_crossings(tris_meshed, labels_meshed, meshed.pos)) {
+    if (!settings.parallel_postprocessing || defects.overfull_edges > 0 ||
+        defects.crossings > stitch_defects(tris_meshed, labels_meshed, meshed.pos).crossings) {
       const PostResult r = postprocess(tris_meshed, labels_meshed, meshed);
       am.flips = r.flips;
       am.repair_operations = r.repair.operations;
