@@ -3,7 +3,9 @@
 // docs/particles.md.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
+#include <optional>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -305,8 +307,11 @@ struct SpringNetwork::Impl {
   }
 
   // ---- Edge flip towards valence 6 (not in the report; switchable) -----------------------
-  // `glide`: skip the valence criterion (a dislocation glide step, remove_dislocations()).
-  bool try_flip(int a, int b, bool glide = false) {
+  // kGlide: skip the valence criterion (a dislocation glide step, remove_dislocations());
+  // kDelaunay: also allow a crease (the caller checked the Delaunay criterion on a coarse
+  // mesh, whose neighbouring faces may meet at more than 60 degrees).
+  enum FlipMode { kValence, kGlide, kDelaunay };
+  bool try_flip(int a, int b, FlipMode mode = kValence) {
     auto ef = edge_faces(a, b);
     if (ef.size() != 2) return false;
     if (!has_directed(ef[0], a, b)) std::swap(ef[0], ef[1]);
@@ -322,12 +327,12 @@ struct SpringNetwork::Impl {
         sq(va - target(a)) + sq(vb - target(b)) + sq(vc - target(c)) + sq(vd - target(d));
     const int after = sq(va - 1 - target(a)) + sq(vb - 1 - target(b)) + sq(vc + 1 - target(c)) +
                       sq(vd + 1 - target(d));
-    if (after >= before && !glide) return false;
+    if (after >= before && mode == kValence) return false;
     const std::array<int, 3> t0{a, d, c}, t1{b, c, d};
     const Vector3d n0 = face_normal(t0), n1 = face_normal(t1);
     const Vector3d old_n =
         face_normal(faces[ef[0]].v).normalized() + face_normal(faces[ef[1]].v).normalized();
-    if (n0.dot(n1) < 0.5 * n0.norm() * n1.norm()) return false;  // no crease
+    if (mode != kDelaunay && n0.dot(n1) < 0.5 * n0.norm() * n1.norm()) return false;  // crease
     if (n0.dot(old_n) <= 0.0 || n1.dot(old_n) <= 0.0) return false;
     const double min_new = std::min(min_angle(P(a), P(d), P(c)), min_angle(P(b), P(c), P(d)));
     const double min_old = std::min(min_angle(P(a), P(b), P(c)), min_angle(P(b), P(a), P(d)));
@@ -386,7 +391,7 @@ struct SpringNetwork::Impl {
             if (e2.size() != 2) break;
             int d = opposite(e2[0], seven, w);
             if (d == five) d = opposite(e2[1], seven, w);
-            if (!interior(d, 6) || !try_flip(seven, w, true)) break;
+            if (!interior(d, 6) || !try_flip(seven, w, kGlide)) break;
             undo.emplace_back(five, d);  // now d is 7 and w is 5
             if (improving_flip_around(d) || improving_flip_around(w)) {
               done = true;
@@ -402,12 +407,86 @@ struct SpringNetwork::Impl {
           }
           if (done) break;
           for (auto it = undo.rbegin(); it != undo.rend(); ++it)
-            try_flip(it->first, it->second, true);
+            try_flip(it->first, it->second, kGlide);
         }
       }
       removed += done ? 1 : 0;
     }
     return removed;
+  }
+
+  // ---- Evenly spread coarse particles (an addition; docs/particles.md, decision 37) -------
+  // A coarse mesh of a few dozen particles fixes where a subdivided fine mesh has its valence
+  // defects (subdivision adds none). Coarsening leaves whatever connectivity its collapses
+  // made (e.g. three valence-4 particles on a 12-particle sphere) and springs keep it.
+  // All-pairs Coulomb repulsion on the surface (the Thomson problem) spreads the particles
+  // evenly, and Delaunay flips give them the matching connectivity (on a sphere with 12
+  // particles: the icosahedron).
+  void spread_particles(const ImplicitSurface& surface, int iterations) {
+    std::vector<int> alive;
+    for (std::size_t i = 0; i < verts.size(); ++i)
+      if (verts[i].alive) alive.push_back(static_cast<int>(i));
+    std::vector<Vector3d> force(verts.size());
+    for (int it = 0; it < iterations; ++it) {
+      evaluate_all(surface);
+      for (int a : alive) force[a].setZero();
+      for (std::size_t i = 0; i < alive.size(); ++i)
+        for (std::size_t j = i + 1; j < alive.size(); ++j) {
+          const Vector3d d = P(alive[i]) - P(alive[j]);
+          const double r2 = std::max(d.squaredNorm(), 1e-24);
+          const Vector3d f = d / (r2 * std::sqrt(r2));
+          force[alive[i]] += f;
+          force[alive[j]] -= f;
+        }
+      double largest = 0.0;
+      for (int a : alive) {
+        if (!verts[a].defined || verts[a].f.gradient.squaredNorm() == 0.0) {
+          force[a].setZero();
+          continue;
+        }
+        const Vector3d n = verts[a].f.gradient.normalized();
+        force[a] -= force[a].dot(n) * n;
+        largest = std::max(largest, force[a].norm());
+      }
+      if (largest == 0.0) break;
+      // The largest move shrinks from 0.1 R to 0 (a simple annealed gradient descent).
+      const double step = 0.1 * R() * (1.0 - static_cast<double>(it) / iterations) / largest;
+      for (int a : alive) {
+        if (force[a].squaredNorm() == 0.0) continue;
+        const auto q = project_to_surface(surface, P(a) + step * force[a], 8);
+        if (q && keeps_orientation(a, *q, verts[a].f.gradient)) verts[a].p = *q;
+      }
+      delaunay_flips();
+    }
+  }
+  // Flips every edge whose two opposite angles (in 3D) sum to more than pi, until none.
+  int delaunay_flips() {
+    auto angle_at = [&](int c, int a, int b) {
+      const Vector3d u = P(a) - P(c), w = P(b) - P(c);
+      return std::atan2(u.cross(w).norm(), u.dot(w));
+    };
+    int total = 0;
+    for (int round = 0; round < 20; ++round) {
+      int flipped = 0;
+      const std::vector<std::uint64_t> keys = sorted_keys();
+      for (std::uint64_t k : keys) {
+        const auto it = springs.find(k);
+        if (it == springs.end() || it->second.topo) continue;
+        const int a = key_lo(k), b = key_hi(k);
+        const auto ef = edge_faces(a, b);
+        if (ef.size() != 2) continue;
+        const int c = opposite(ef[0], a, b), d = opposite(ef[1], a, b);
+        // Both ways must agree (a quad that is folded over looks non-Delaunay either way and
+        // would flip back and forth).
+        if (angle_at(c, a, b) + angle_at(d, a, b) > std::numbers::pi + 1e-9 &&
+            angle_at(a, c, d) + angle_at(b, c, d) < std::numbers::pi - 1e-9 &&
+            try_flip(a, b, kDelaunay))
+          ++flipped;
+      }
+      total += flipped;
+      if (flipped == 0) break;
+    }
+    return total;
   }
 
   // ---- Density correction (an addition; docs/particles.md) -------------------------------
@@ -417,15 +496,18 @@ struct SpringNetwork::Impl {
   // many particles are missing or superfluous (count ~ 1 / s^2); collapse the shortest or
   // split the longest springs until that count is reached.
   int rebalance(double mean_stretch, const ImplicitSurface& surface) {
-    std::size_t alive = 0;
-    for (const Vertex& v : verts) alive += v.alive ? 1 : 0;
-    const double change = static_cast<double>(alive) * (mean_stretch * mean_stretch - 1.0);
-    const int wanted = static_cast<int>(std::lround(std::abs(change)));
+    const double change = static_cast<double>(alive_count()) * (mean_stretch * mean_stretch - 1.0);
+    return change_count(static_cast<int>(std::lround(change)), surface);
+  }
+  // Adds (`delta` > 0: splits of the longest springs) or removes (collapses of the shortest)
+  // up to |delta| particles; returns how many changes were made.
+  int change_count(int delta, const ImplicitSurface& surface) {
     std::vector<std::pair<double, std::uint64_t>> order;
     for (const auto& [k, sp] : springs)
       order.emplace_back(length(key_lo(k), key_hi(k)) / sp.rest, k);
     std::sort(order.begin(), order.end());
-    if (change > 0) std::reverse(order.begin(), order.end());
+    if (delta > 0) std::reverse(order.begin(), order.end());
+    const int wanted = std::abs(delta);
     int done = 0;
     for (const auto& [ratio, k] : order) {
       if (done >= wanted) break;
@@ -433,9 +515,14 @@ struct SpringNetwork::Impl {
       if (it == springs.end() || marked(it->second) || it->second.topo || it->second.special)
         continue;
       const int a = key_lo(k), b = key_hi(k);
-      if (change < 0 ? try_collapse(a, b) : try_split(a, b, surface)) ++done;
+      if (delta < 0 ? try_collapse(a, b) : try_split(a, b, surface)) ++done;
     }
     return done;
+  }
+  std::size_t alive_count() const {
+    std::size_t alive = 0;
+    for (const Vertex& v : verts) alive += v.alive ? 1 : 0;
+    return alive;
   }
   double mean_stretch() const {
     double sum = 0.0;
@@ -938,10 +1025,13 @@ SpringNetwork::SpringNetwork(const Mesh& start, const ParticleOptions& options)
   if (!(o.edge_length > 0.0) || !(o.rho > 0.0) || !(o.time_step_factor > 0.0) || !(o.d_min > 0.0) ||
       !(o.d_max > 2.0 * o.d_min) || !(o.spring_stiffening >= 0.0) || !(o.moving_epsilon >= 0.0) ||
       !(o.theta >= 0.0 && o.theta <= 1.0) || !(o.lambda >= 0.0 && o.lambda < 1.0) ||
-      !(o.special_factor > 0.0 && o.special_factor <= 1.0) || !(o.max_step > 0.0))
+      !(o.special_factor > 0.0 && o.special_factor <= 1.0) || !(o.max_step > 0.0) ||
+      !(o.subdivision_accept >= 0.0 && o.subdivision_accept <= 1.0) || o.subdivision_trials < 0 ||
+      o.max_spread_particles < 0)
     throw InvalidInputError(
         "particles: impossible options (need edge_length, rho > 0, d_max > 2 d_min, theta in "
-        "[0,1], lambda in [0,1), special_factor in (0,1])");
+        "[0,1], lambda in [0,1), special_factor in (0,1], subdivision_accept in [0,1], "
+        "subdivision_trials and max_spread_particles >= 0)");
   start.validate();
   for (const auto& p : start.positions) m.add_vertex(p);
   for (const auto& t : start.triangles) {
@@ -1144,7 +1234,7 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
   return rep;
 }
 
-int SpringNetwork::relax(const ImplicitSurface& surface) {
+int SpringNetwork::relax(const ImplicitSurface& surface, std::size_t target_vertices) {
   Impl& m = *impl_;
   int quiet = 0, n = 0, rounds = 0, glide_rounds = 0;
   m.converged = false;
@@ -1193,8 +1283,17 @@ int SpringNetwork::relax(const ImplicitSurface& surface) {
       quiet = 0;
       continue;
     }
+    // The multilevel start asks for an exact count (a coarse particle becomes 4^k fine ones);
+    // otherwise the mean stretch decides.
+    const long missing = target_vertices > 0 ? static_cast<long>(target_vertices) -
+                                                   static_cast<long>(m.alive_count())
+                                             : 0;
     const double s = m.mean_stretch();
-    if (std::abs(s - 1.0) > m.o.density_tolerance && rounds < 8 && m.rebalance(s, surface) > 0) {
+    const bool correct =
+        target_vertices > 0 ? missing != 0 : std::abs(s - 1.0) > m.o.density_tolerance;
+    if (correct && rounds < 8 &&
+        (target_vertices > 0 ? m.change_count(static_cast<int>(missing), surface)
+                             : m.rebalance(s, surface)) > 0) {
       ++rounds;
       quiet = 0;
       continue;
@@ -1207,6 +1306,11 @@ int SpringNetwork::relax(const ImplicitSurface& surface) {
   m.o.flips = flips;
   project(surface);
   return n;
+}
+
+void SpringNetwork::spread_evenly(const ImplicitSurface& surface, int iterations) {
+  impl_->spread_particles(surface, iterations);
+  project(surface);
 }
 
 void SpringNetwork::project(const ImplicitSurface& surface) {
@@ -1297,16 +1401,36 @@ Mesh subdivide(const Mesh& m, const ImplicitSurface& surface) {
   return out;
 }
 
-}  // namespace
+// Area of a triangle mesh.
+double mesh_area(const Mesh& m) {
+  double area = 0.0;
+  for (const auto& t : m.triangles)
+    area +=
+        0.5 *
+        (m.positions[t[1]] - m.positions[t[0]]).cross(m.positions[t[2]] - m.positions[t[0]]).norm();
+  return area;
+}
 
-SpringNetwork relaxed_network(const ImplicitSurface& surface, const ParticleOptions& options,
-                              int* iterations) {
+// Particles a closed mesh of near-equilateral triangles with edge `edge` needs on `area`:
+// F = 2 (V - chi) triangles of sqrt(3)/4 edge^2 each.
+double particles_for_area(double area, double edge, long long chi) {
+  return area / (std::sqrt(3.0) / 2.0 * edge * edge) + static_cast<double>(chi);
+}
+
+bool same_topology(const SpringNetwork& net, const TopologyStats& reference, int components) {
+  const Mesh m = net.mesh();
+  const TopologyStats s = topology_stats(m);
+  return net.converged() && s.boundary_edges == 0 && s.nonmanifold_edges == 0 &&
+         s.euler_characteristic == reference.euler_characteristic &&
+         component_count(m) == components;
+}
+
+// The layered start: marching tetrahedra at 2^k R relaxed and subdivided 1:4 level by level.
+SpringNetwork layered_network(const ImplicitSurface& surface, const ParticleOptions& options,
+                              const Mesh& fine, int* iterations) {
   // Gap decision: the multilevel start needs a closed mesh; surfaces with borders (scans)
   // start from the fine marching-tetrahedra mesh.
   const double R = options.edge_length;
-  const Mesh fine = marching_tetrahedra(surface, options.start_spacing * R);
-  if (fine.triangles.empty())
-    throw InvalidInputError("particles: the surface has no zero crossing inside its bounds");
   // Multilevel start (docs/particles.md): the coarsest level 2^k R whose marching-tetrahedra
   // mesh has the fine one's topology (closed, same components and Euler characteristic) and
   // enough vertices is relaxed, then subdivided 1:4 and relaxed again at half the length.
@@ -1374,8 +1498,216 @@ SpringNetwork relaxed_network(const ImplicitSurface& surface, const ParticleOpti
   }
   SpringNetwork net(start, options);
   total += net.relax(surface);
-  if (iterations) *iterations = total;
+  *iterations += total;
   return net;
+}
+
+// 1:n subdivision: every triangle becomes n^2 triangles on the barycentric grid, points
+// Newton-projected onto the surface. Only the coarse mesh's vertices keep their valence;
+// every new vertex has valence 6.
+Mesh subdivide_n(const Mesh& m, int n, const ImplicitSurface& surface) {
+  Mesh out;
+  out.positions = m.positions;
+  auto add_point = [&](const Vector3d& p, double reach) {
+    Vector3d q = p;
+    if (const auto s = project_to_surface(surface, p, 8); s && (*s - p).norm() < reach) q = *s;
+    out.positions.push_back(q);
+    return static_cast<int>(out.positions.size()) - 1;
+  };
+  // Edge points are shared: key (edge, index counted from the lower end).
+  std::unordered_map<std::uint64_t, std::vector<int>> edge_points;
+  auto edge_point = [&](int a, int b, int i) {
+    if (i == 0) return a;
+    if (i == n) return b;
+    const int lo = std::min(a, b), hi = std::max(a, b), from_lo = a == lo ? i : n - i;
+    auto& pts = edge_points[edge_key(lo, hi)];
+    if (pts.empty()) {
+      const Vector3d p = m.positions[lo], q = m.positions[hi];
+      for (int k = 1; k < n; ++k)
+        pts.push_back(add_point(p + (q - p) * (static_cast<double>(k) / n), 0.5 * (q - p).norm()));
+    }
+    return pts[from_lo - 1];
+  };
+  std::vector<int> id((n + 1) * (n + 1));
+  for (const auto& t : m.triangles) {
+    const Vector3d a = m.positions[t[0]], ab = m.positions[t[1]] - a, ac = m.positions[t[2]] - a;
+    const double reach = 0.5 * std::max({ab.norm(), ac.norm(), (ac - ab).norm()});
+    // Grid point (i, j) = a + i/n ab + j/n ac, i + j <= n.
+    for (int i = 0; i <= n; ++i)
+      for (int j = 0; i + j <= n; ++j)
+        id[i * (n + 1) + j] = j == 0       ? edge_point(t[0], t[1], i)
+                              : i == 0     ? edge_point(t[0], t[2], j)
+                              : i + j == n ? edge_point(t[1], t[2], j)
+                                           : add_point(a + ab * (static_cast<double>(i) / n) +
+                                                           ac * (static_cast<double>(j) / n),
+                                                       reach);
+    auto at = [&](int i, int j) { return id[i * (n + 1) + j]; };
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; i + j < n; ++j) {
+        out.triangles.push_back({at(i, j), at(i + 1, j), at(i, j + 1)});
+        if (i + j + 1 < n) out.triangles.push_back({at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)});
+      }
+  }
+  return out;
+}
+
+// Every edge length of a closed mesh (each edge twice, once per face).
+template <class F>
+void for_each_edge_length(const Mesh& m, F&& f) {
+  for (const auto& t : m.triangles)
+    for (int k = 0; k < 3; ++k) f((m.positions[t[k]] - m.positions[t[(k + 1) % 3]]).norm());
+}
+
+// Edge lengths against R: (fraction within +-15 %, largest |l / R - 1|).
+std::pair<double, double> edge_uniformity(const Mesh& m, double R) {
+  std::size_t within = 0, count = 0;
+  double worst = 0.0;
+  for_each_edge_length(m, [&](double l) {
+    const double x = std::abs(l / R - 1.0);
+    within += x <= 0.15 ? 1 : 0;
+    worst = std::max(worst, x);
+    ++count;
+  });
+  return {count ? static_cast<double>(within) / static_cast<double>(count) : 0.0, worst};
+}
+
+// How far the edges of a 1:n subdivision of `coarse` would stray from R at best: the coarse
+// mesh's shortest and longest edge relative to its mean, times the stretch the fine particle
+// count leaves (`wanted` particles were asked for).
+double handed_down_spread(const Mesh& coarse, int n, double wanted, long long chi) {
+  double lo = std::numeric_limits<double>::infinity(), hi = 0.0, sum = 0.0;
+  std::size_t count = 0;
+  for_each_edge_length(
+      coarse, [&](double l) { lo = std::min(lo, l), hi = std::max(hi, l), sum += l, ++count; });
+  const double mean = sum / static_cast<double>(std::max<std::size_t>(count, 1));
+  const double fine_count =
+      static_cast<double>(n * n) * (static_cast<double>(coarse.vertex_count()) - chi);
+  const double stretch = std::sqrt((wanted - static_cast<double>(chi)) / fine_count);
+  return std::max(hi / mean * stretch - 1.0, 1.0 - lo / mean * stretch);
+}
+
+// A coarse mesh for the subdivided start, to be refined 1:n.
+struct CoarseCandidate {
+  double score = 0.0;  // handed_down_spread(): smaller is better
+  int n = 0;
+  Mesh mesh;
+};
+
+// The subdivided start (docs/particles.md, decision 37): coarse meshes with V_c particles,
+// spread evenly, where V_c and n are chosen so that their 1:n subdivision has the particle
+// count R needs: V - chi = n^2 (V_c - chi). For every n from 2 to max_subdivision with
+// 12 <= V_c <= max_spread_particles per component, the two counts next to V_c; best first.
+// Empty if none keeps the topology.
+std::vector<CoarseCandidate> coarse_candidates(const ImplicitSurface& surface,
+                                               const ParticleOptions& options, const Mesh& fine,
+                                               int* iterations) {
+  const TopologyStats fine_stats = topology_stats(fine);
+  const int components = component_count(fine);
+  const long long chi = fine_stats.euler_characteristic;
+  const double R = options.edge_length;
+  const double per_component = 12.0 * components;
+  std::vector<CoarseCandidate> out;
+  // The candidates are coarsened from the marching-tetrahedra mesh at twice the spacing when
+  // it has the fine one's topology (relaxing the fine mesh to 2 R cost most of this search).
+  Mesh source = marching_tetrahedra(surface, options.start_spacing * 2.0 * R);
+  const TopologyStats source_stats = topology_stats(source);
+  if (source.triangles.empty() || source_stats.boundary_edges != 0 ||
+      source_stats.nonmanifold_edges != 0 ||
+      source_stats.euler_characteristic != fine_stats.euler_characteristic ||
+      component_count(source) != components)
+    source = fine;
+  {
+    ParticleOptions half = options;
+    half.edge_length = 2.0 * R;
+    half.max_iterations = std::min(options.max_iterations, 600);
+    half.convergence_tolerance = std::max(options.convergence_tolerance, 1e-2);
+    SpringNetwork seed(source, half);
+    *iterations += seed.relax(surface);
+    if (!same_topology(seed, fine_stats, components)) return out;
+    source = seed.mesh();
+  }
+  // The area from the seed subdivided once and projected (the marching-tetrahedra mesh's
+  // chords miss ~1 % on a sphere at R / radius = 0.2; this is within ~0.1 %).
+  const double wanted = particles_for_area(mesh_area(subdivide(source, surface)), R, chi);
+  for (int n = 2; n <= options.max_subdivision; ++n) {
+    const double coarse_count =
+        (wanted - static_cast<double>(chi)) / (n * n) + static_cast<double>(chi);
+    if (std::ceil(coarse_count) < per_component) break;
+    if (coarse_count > options.max_spread_particles * components) continue;
+    for (const double count : {std::floor(coarse_count), std::ceil(coarse_count)}) {
+      if (count < per_component) continue;
+      ParticleOptions coarse = options;
+      coarse.edge_length = R * n * std::sqrt((wanted - chi) / (n * n * (count - chi)));
+      coarse.max_iterations = std::min(options.max_iterations, 600);
+      coarse.convergence_tolerance = std::max(options.convergence_tolerance, 1e-2);
+      SpringNetwork net(source, coarse);
+      *iterations += net.relax(surface, static_cast<std::size_t>(count));
+      net.spread_evenly(surface, 200);
+      *iterations += net.relax(surface, static_cast<std::size_t>(count));
+      if (!same_topology(net, fine_stats, components)) continue;
+      Mesh mesh = net.mesh();
+      const double score = handed_down_spread(mesh, n, wanted, chi);
+      out.push_back({score, n, std::move(mesh)});
+    }
+  }
+  std::sort(out.begin(), out.end(),
+            [](const CoarseCandidate& a, const CoarseCandidate& b) { return a.score < b.score; });
+  return out;
+}
+
+}  // namespace
+
+SpringNetwork relaxed_network(const ImplicitSurface& surface, const ParticleOptions& options,
+                              int* iterations) {
+  const Mesh fine = marching_tetrahedra(surface, options.start_spacing * options.edge_length);
+  if (fine.triangles.empty())
+    throw InvalidInputError("particles: the surface has no zero crossing inside its bounds");
+  int total = 0;
+  const TopologyStats fine_stats = topology_stats(fine);
+  const bool closed = fine_stats.boundary_edges == 0 && fine_stats.nonmanifold_edges == 0;
+  // Decision 37: with uniform rest lengths a closed surface also gets the subdivided start
+  // (the best-scored coarse candidates, subdivided and relaxed, until one has every edge
+  // within +-15 % of R); the layered start runs only if none has `subdivision_accept` of
+  // them. The best mesh by edge-length uniformity wins.
+  const auto uniformity = [&](const SpringNetwork& net) {
+    return edge_uniformity(net.mesh(), options.edge_length);
+  };
+  std::optional<SpringNetwork> best;
+  std::pair<double, double> best_uniformity{-1.0, 0.0};
+  const auto keep_if_better = [&](SpringNetwork&& net) {
+    const auto u = uniformity(net);
+    if (u.first > best_uniformity.first ||
+        (u.first == best_uniformity.first && u.second < best_uniformity.second))
+      best_uniformity = u, best = std::move(net);
+  };
+  const int components = component_count(fine);
+  // Spheres (genus 0) only: a coarse mesh of a dozen particles cannot follow a torus' hole
+  // (its subdivision did not converge in 3,000 steps).
+  const bool spheres = fine_stats.euler_characteristic == 2LL * components;
+  if (closed && spheres && !options.adaptive && options.max_subdivision >= 2) {
+    const auto candidates = coarse_candidates(surface, options, fine, &total);
+    for (std::size_t i = 0;
+         i < candidates.size() && static_cast<int>(i) < options.subdivision_trials &&
+         best_uniformity.first < 1.0;
+         ++i) {
+      ParticleOptions last = options;
+      // Subdivision gave the count (chosen with its stretch in view); split/collapse rounds
+      // and the density correction would only add valence defects.
+      last.remesh_rounds = 0;
+      last.density_tolerance = 1.0;
+      // A candidate that does not settle soon is a poor one (the layered start follows).
+      last.max_iterations = std::min(options.max_iterations, 500);
+      SpringNetwork net(subdivide_n(candidates[i].mesh, candidates[i].n, surface), last);
+      total += net.relax(surface);
+      if (same_topology(net, fine_stats, components)) keep_if_better(std::move(net));
+    }
+  }
+  if (best_uniformity.first < options.subdivision_accept) {
+    SpringNetwork layered = layered_network(surface, options, fine, &total);
+    if (!best || layered.converged()) keep_if_better(std::move(layered));
+  }
+  if (iterations) *iterations = total;
+  return std::move(*best);
 }
 
 ParticleMeshResult particle_mesh(const ImplicitSurface& surface, const ParticleOptions& options) {

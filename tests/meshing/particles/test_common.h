@@ -3,7 +3,9 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <map>
 #include <numbers>
+#include <set>
 #include <vector>
 
 #include "implicit_adapters.h"
@@ -25,6 +27,19 @@ inline std::vector<double> edge_lengths(const Mesh& m) {
       if (t[k] < t[(k + 1) % 3])
         out.push_back((m.positions[t[k]] - m.positions[t[(k + 1) % 3]]).norm());
   return out;  // each interior edge once (the face where it runs from lower to higher index)
+}
+
+//! Number of vertices per valence (edges counted once per face pair).
+inline std::map<int, int> valence_histogram(const Mesh& m) {
+  std::vector<std::set<int>> neighbours(m.positions.size());
+  for (const auto& t : m.triangles)
+    for (int k = 0; k < 3; ++k) {
+      neighbours[t[k]].insert(t[(k + 1) % 3]);
+      neighbours[t[(k + 1) % 3]].insert(t[k]);
+    }
+  std::map<int, int> histogram;
+  for (const auto& n : neighbours) ++histogram[static_cast<int>(n.size())];
+  return histogram;
 }
 
 inline double triangle_min_angle_deg(const Mesh& m, const std::array<int, 3>& t) {

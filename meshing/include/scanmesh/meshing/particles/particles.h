@@ -56,6 +56,15 @@ struct ParticleOptions {
   double start_spacing = 1.25;  //!< start triangulation grid spacing, fraction of R
   //! Multilevel start: relax first at up to 2^max_levels R, then subdivide 1:4 (0: off).
   int max_levels = 3;
+  //! Subdivided start (closed surfaces, uniform mode; docs/particles.md, decision 37): the
+  //! largest 1:n subdivision of an evenly spread coarse mesh tried (< 2: off) ...
+  int max_subdivision = 8;
+  //! ... the largest coarse particle count per component it spreads ...
+  int max_spread_particles = 100;
+  //! ... how many of the best-scored coarse candidates are subdivided and relaxed ...
+  int subdivision_trials = 3;
+  //! ... and the fraction of edges within +-15 % of R that spares the layered start.
+  double subdivision_accept = 0.99;
   //! relax(): isotropic remeshing rounds (split/collapse/flip/tangential relaxation) before
   //! the spring iterations.
   int remesh_rounds = 10;
@@ -102,10 +111,16 @@ class SpringNetwork {
   StepReport step(const ImplicitSurface& surface, double surface_time_step = 0.0);
   //! Steps until converged (see ParticleOptions::convergence_tolerance) or max_iterations,
   //! then projects every vertex onto the surface (Newton, eq. 8 with P = 0). Returns the
-  //! number of iterations.
-  int relax(const ImplicitSurface& surface);
+  //! number of iterations. `target_vertices` > 0 replaces the mean-stretch density correction
+  //! (docs/particles.md, decision 13) by one towards exactly that many particles.
+  int relax(const ImplicitSurface& surface, std::size_t target_vertices = 0);
   //! Newton projection of every vertex (no tangential motion).
   void project(const ImplicitSurface& surface);
+  //! Spreads the particles evenly over the surface: `iterations` annealed steps of all-pairs
+  //! Coulomb repulsion (tangential, Newton-projected), each followed by Delaunay flips (3D
+  //! opposite angles). Quadratic in the particle count: meant for coarse meshes (the
+  //! subdivided start, docs/particles.md decision 37).
+  void spread_evenly(const ImplicitSurface& surface, int iterations);
 
   //! The current mesh (compact indices, counter-clockwise from outside) and the id of each of
   //! its vertices.
