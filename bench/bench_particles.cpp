@@ -1,7 +1,8 @@
 // Benchmark of seed 003's spring network against CGAL's Delaunay-refinement implicit surface
-// mesher (make_surface_mesh + Implicit_surface_3) and this project's marching tetrahedra, on
-// the same skeletal implicit surface at about the same vertex count; plus the per-frame update
-// rate of a moving ~10,000-vertex mesh. Prints a Markdown table (docs/benchmarks.md).
+// mesher (make_surface_mesh + Implicit_surface_3), VTK's marching cubes (vtkMarchingCubes) and
+// this project's marching tetrahedra, on the same skeletal implicit surface at about the same
+// vertex count; plus the per-frame update rate of a moving ~10,000-vertex mesh. Prints a
+// Markdown table (docs/benchmarks.md).
 //
 // q = 4 sqrt(3) A / (l1^2 + l2^2 + l3^2): 1 for an equilateral triangle, 0 for a degenerate one.
 // Distance: Newton projection distance to F = 0 of every vertex and every triangle centroid.
@@ -14,6 +15,13 @@
 #include <CGAL/make_surface_mesh.h>
 
 #include <omp.h>
+#include <vtkCellArray.h>
+#include <vtkDoubleArray.h>
+#include <vtkImageData.h>
+#include <vtkMarchingCubes.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkPolyData.h>
 
 #include <chrono>
 #include <cmath>
@@ -113,6 +121,49 @@ Mesh run_cgal(const particles::ImplicitSurface& s, double radius_bound, double d
   return m;
 }
 
+// VTK's classic marching cubes on the field sampled at grid spacing h over the bounds; the
+// sampling counts in the time, as it does for marching tetrahedra.
+Mesh run_vtk_marching_cubes(const particles::ImplicitSurface& s, double h) {
+  const Eigen::AlignedBox3d box = s.bounds();
+  const Eigen::Vector3i n = (box.sizes() / h).array().ceil().cast<int>() + 1;
+  vtkNew<vtkImageData> image;
+  image->SetDimensions(n.x(), n.y(), n.z());
+  image->SetSpacing(h, h, h);
+  image->SetOrigin(box.min().x(), box.min().y(), box.min().z());
+  vtkNew<vtkDoubleArray> values;
+  values->SetNumberOfTuples(static_cast<vtkIdType>(n.x()) * n.y() * n.z());
+  vtkIdType index = 0;
+  for (int k = 0; k < n.z(); ++k)
+    for (int j = 0; j < n.y(); ++j)
+      for (int i = 0; i < n.x(); ++i) {
+        const auto f = s.evaluate(box.min() + h * Vector3d(i, j, k));
+        values->SetValue(index++, f ? f->value : 1.0);  // undefined: outside
+      }
+  image->GetPointData()->SetScalars(values);
+  vtkNew<vtkMarchingCubes> mc;
+  mc->SetInputData(image);
+  mc->SetValue(0, 0.0);
+  mc->ComputeNormalsOff();
+  mc->ComputeGradientsOff();
+  mc->ComputeScalarsOff();
+  mc->Update();
+  vtkPolyData* out = mc->GetOutput();
+  Mesh m;
+  for (vtkIdType i = 0; i < out->GetNumberOfPoints(); ++i) {
+    double p[3];
+    out->GetPoint(i, p);
+    m.positions.emplace_back(p[0], p[1], p[2]);
+  }
+  vtkCellArray* polys = out->GetPolys();
+  vtkIdType count = 0;
+  const vtkIdType* ids = nullptr;
+  for (polys->InitTraversal(); polys->GetNextCell(count, ids);)
+    if (count == 3)
+      m.triangles.push_back(
+          {static_cast<int>(ids[0]), static_cast<int>(ids[1]), static_cast<int>(ids[2])});
+  return m;
+}
+
 }  // namespace
 
 int main() {
@@ -177,6 +228,16 @@ int main() {
     h *= std::sqrt(static_cast<double>(mt.mesh.vertex_count()) / target);
   }
   print_row(mt, surface);
+
+  Row vmc{"VTK marching cubes (vtkMarchingCubes, spacing tuned)"};
+  h = R;
+  for (int round = 0; round < 3; ++round) {
+    t0 = now();
+    vmc.mesh = run_vtk_marching_cubes(surface, h);
+    vmc.seconds = now() - t0;
+    h *= std::sqrt(static_cast<double>(vmc.mesh.vertex_count()) / target);
+  }
+  print_row(vmc, surface);
 
   // Per-frame update of a moving mesh of ~10,000 vertices: blob_glide-like skeleton moving.
   auto sk = std::make_shared<sim::AnimatedSkeleton>(sim::AnimatedSkeleton::from_yaml_text(R"(
