@@ -415,6 +415,75 @@ struct SpringNetwork::Impl {
     return removed;
   }
 
+  // ---- Turned border triangles (scan mode; an addition, docs/particles.md, decision 38) ---
+  // Where the range surface ends (grid holes, occlusion borders) a triangle at a border can
+  // end up turned over against the surface normal: its border particles slide along their
+  // border chord and cannot untangle it. Such a triangle is dropped (the border moves inwards)
+  // when that keeps the mesh a manifold: it has a border edge whose opposite particle is
+  // interior, or two border edges (their shared particle goes with it). A turned triangle
+  // that touches the border only at a particle goes with that particle's whole fan, if the
+  // fan's rim is interior but for the particle's two border neighbours. Returns the number of
+  // triangles dropped.
+  int drop_turned_border_faces(const ImplicitSurface& surface) {
+    int dropped = 0;
+    for (int round = 0; round < 8; ++round) {
+      int this_round = 0;
+      for (std::size_t f = 0; f < faces.size(); ++f) {
+        if (!faces[f].alive || !turned_over(faces[f].v, surface)) continue;
+        const auto t = faces[f].v;
+        int border_edges = 0, opposite_of_border = -1;
+        for (int k = 0; k < 3; ++k)
+          if (edge_faces(t[k], t[(k + 1) % 3]).size() == 1)
+            ++border_edges, opposite_of_border = t[(k + 2) % 3];
+        if (border_edges == 1 && verts[opposite_of_border].boundary) continue;
+        if (border_edges > 0) {
+          drop_faces({static_cast<int>(f)});
+          ++this_round;
+          continue;
+        }
+        for (int v : t)
+          if (verts[v].boundary && fan_rim_is_interior(v)) {
+            const std::vector<int> fan = verts[v].faces;
+            drop_faces(fan);
+            this_round += static_cast<int>(fan.size());
+            break;
+          }
+      }
+      if (this_round == 0) break;
+      dropped += this_round;
+    }
+    if (dropped > 0) rebuild_springs();
+    return dropped;
+  }
+  // Removes faces; their particles become border particles, or go if no face is left.
+  void drop_faces(const std::vector<int>& doomed) {
+    for (int f : doomed) {
+      const auto t = faces[f].v;
+      kill_face(f);
+      for (int v : t) {
+        verts[v].boundary = true;
+        if (verts[v].faces.empty() && verts[v].alive) kill_vertex(v);
+      }
+    }
+  }
+  // True if every neighbour of border particle v is interior except its two border
+  // neighbours (v has exactly two border edges).
+  bool fan_rim_is_interior(int v) const {
+    int border_neighbours = 0;
+    for (int w : neighbors(v)) {
+      const bool border_edge = edge_faces(v, w).size() == 1;
+      border_neighbours += border_edge ? 1 : 0;
+      if (!border_edge && verts[w].boundary) return false;
+    }
+    return border_neighbours == 2;
+  }
+  // True if the triangle's normal points against F's gradient at its centroid (where F is
+  // defined there).
+  bool turned_over(const std::array<int, 3>& t, const ImplicitSurface& surface) const {
+    const auto f = surface.evaluate((P(t[0]) + P(t[1]) + P(t[2])) / 3.0);
+    return f && face_normal(t).dot(f->gradient) <= 0.0;
+  }
+
   // ---- Evenly spread coarse particles (an addition; docs/particles.md, decision 37) -------
   // A coarse mesh of a few dozen particles fixes where a subdivided fine mesh has its valence
   // defects (subdivision adds none). Coarsening leaves whatever connectivity its collapses
@@ -1305,6 +1374,10 @@ int SpringNetwork::relax(const ImplicitSurface& surface, std::size_t target_vert
   m.o.topology_change = topology_change;
   m.o.flips = flips;
   project(surface);
+  // Scan mode (a mesh with borders): no triangle may stay turned over at a border.
+  if (std::any_of(m.verts.begin(), m.verts.end(),
+                  [](const Vertex& v) { return v.alive && v.boundary; }))
+    m.drop_turned_border_faces(surface);
   return n;
 }
 
