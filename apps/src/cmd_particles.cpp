@@ -88,6 +88,10 @@ int run_particles(const ParticlesArgs& args) {
   o.seed = args.seed;
   nlohmann::json report = {{"edge_length", args.edge}, {"adaptive", args.adaptive}};
   const Stopwatch watch;
+  // A full-resolution scan can take minutes: a bar on the terminal (iterations of the final
+  // relaxation against its limit, then frames).
+  Progress progress("particles");
+  o.progress = [&progress](int done, int total) { progress.update(done, total); };
 
   if (!args.grid.empty() || !sim::AnimatedSkeleton::is_animated_yaml(read_text(args.scene))) {
     Mesh mesh;
@@ -109,6 +113,7 @@ int run_particles(const ParticlesArgs& args) {
       converged = r.converged;
       report["mode"] = "static";
     }
+    progress.finish();
     particles::write_ply_with_ids(out / "particles.ply", mesh, ids);
     write_png(out / "particles.png", render_views(mesh));
     report["iterations"] = iterations;
@@ -132,6 +137,7 @@ int run_particles(const ParticlesArgs& args) {
   };
   const auto frames = particles::animate(surface_at, skeleton->start_time(), skeleton->end_time(),
                                          args.frames, o, args.steps_per_frame);
+  progress.finish();
   nlohmann::json list = nlohmann::json::array();
   std::vector<Image8> strip;
   const std::size_t shown = std::min<std::size_t>(frames.size(), 12);

@@ -20,6 +20,7 @@ std::vector<AnimationFrame> animate(const SurfaceAtTime& surface_at, double t0, 
   SpringNetwork net = relaxed_network(*first, options);
   out.push_back({t0, net.mesh(), net.vertex_ids(), 0, 0});
   for (int f = 1; f < frames; ++f) {
+    if (options.progress) options.progress(f, frames);
     const double ta = t0 + (t1 - t0) * (f - 1) / (frames - 1);
     const double tb = t0 + (t1 - t0) * f / (frames - 1);
     const double tau = (tb - ta) / steps_per_frame;
@@ -36,6 +37,7 @@ std::vector<AnimationFrame> animate(const SurfaceAtTime& surface_at, double t0, 
     net.project(*s);
     out.push_back({tb, net.mesh(), net.vertex_ids(), cuts, fallback});
   }
+  if (options.progress) options.progress(frames, frames);
   return out;
 }
 

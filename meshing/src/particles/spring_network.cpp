@@ -1332,6 +1332,7 @@ int SpringNetwork::relax(const ImplicitSurface& surface, std::size_t target_vert
     // Freeze the flips after `flip_freeze` steps (decision 34): on scans the flips and the
     // collapses of Rule 1 kept undoing each other somewhere (never converged in 3,000 steps).
     if (m.o.flip_freeze > 0 && n == m.o.flip_freeze) m.o.flips = false;
+    if (m.o.progress && n % 10 == 0) m.o.progress(n, m.o.max_iterations);
     const StepReport r = step(surface);
     if (r.changed() || m.verts.size() != window.size()) {
       quiet = 0;
@@ -1533,6 +1534,7 @@ SpringNetwork layered_network(const ImplicitSurface& surface, const ParticleOpti
     coarse.max_iterations = std::min(options.max_iterations, 600);
     // A coarse level is subdivided and relaxed again: it need not settle as tightly.
     coarse.convergence_tolerance = std::max(options.convergence_tolerance, 1e-2);
+    coarse.progress = nullptr;  // quick; the display follows the final level
     SpringNetwork net(start, coarse);
     total += net.relax(surface);
     const Mesh relaxed = net.mesh();
@@ -1694,6 +1696,7 @@ std::vector<CoarseCandidate> coarse_candidates(const ImplicitSurface& surface,
     half.edge_length = 2.0 * R;
     half.max_iterations = std::min(options.max_iterations, 600);
     half.convergence_tolerance = std::max(options.convergence_tolerance, 1e-2);
+    half.progress = nullptr;
     SpringNetwork seed(source, half);
     *iterations += seed.relax(surface);
     if (!same_topology(seed, fine_stats, components)) return out;
@@ -1713,6 +1716,7 @@ std::vector<CoarseCandidate> coarse_candidates(const ImplicitSurface& surface,
       coarse.edge_length = R * n * std::sqrt((wanted - chi) / (n * n * (count - chi)));
       coarse.max_iterations = std::min(options.max_iterations, 600);
       coarse.convergence_tolerance = std::max(options.convergence_tolerance, 1e-2);
+      coarse.progress = nullptr;  // quick; the display follows the final level
       SpringNetwork net(source, coarse);
       *iterations += net.relax(surface, static_cast<std::size_t>(count));
       net.spread_evenly(surface, 200);

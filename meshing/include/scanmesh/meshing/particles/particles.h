@@ -78,6 +78,9 @@ struct ParticleOptions {
   //! keep it from converging (docs/particles.md, decision 34; 0: never).
   int flip_freeze = 500;
   std::uint64_t seed = 1;  //!< reserved (CLI --seed); the spring network uses no randomness
+  //! Progress display (optional): relax() of the final level calls it every 10 iterations
+  //! with (iterations, max_iterations), animate() once per frame with (frame, frames).
+  std::function<void(int done, int total)> progress;
 };
 
 //! What one iteration did.
