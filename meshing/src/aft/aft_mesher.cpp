@@ -69,6 +69,82 @@ double point_segment_distance(const Vector3d& p, const Vector3d& a, const Vector
   return (a + t * ab - p).norm();
 }
 
+// Bisection on a bracketed sign change of f to `tol` (200 steps at most), stopping at an
+// undefined midpoint: the midpoint of the last bracket.
+template <typename F>
+double plain_bisection(const F& f, double a, double fa, double b, double tol) {
+  for (int it = 0; it < 200 && b - a > tol; ++it) {
+    const double m = 0.5 * (a + b);
+    const auto fm = f(m);
+    if (!fm) break;
+    if ((*fm < 0) == (fa < 0)) {
+      a = m;
+      fa = *fm;
+    } else {
+      b = m;
+    }
+  }
+  return 0.5 * (a + b);
+}
+
+// The root of the bisection: [a, b] halved while wider than `tol` (at most 200 times), keeping
+// the half whose ends differ in "F < 0", stopping early where F is undefined; the midpoint of
+// the last bracket. F(a) and F(b) are given (F(a) < 0 != F(b) < 0).
+//
+// The answer is that of the plain bisection loop, with fewer evaluations of F: the bisection
+// only needs to know on which side of the sign change each midpoint lies. So the sign change is
+// first located by the Illinois variant of regula falsi (a bracket [lo, hi] a tenth of
+// `tol` wide after ~5 evaluations, where the bisection takes ~17), and the bisection is then
+// replayed, evaluating F only at midpoints inside [lo, hi]. The replay takes F's sign on
+// [a, lo] and [hi, b] to be that of the ends, i.e. one sign change in [a, b] (a quarter of the
+// finest cell, the rotation construction's sample step); were there three, it could settle on
+// another of them than the plain loop. An undefined point met while locating runs the plain
+// loop. The sample head's meshes at its units, / 2 and / 4 are bit-identical
+// (docs/animation-meshes.md, speed work of 2 Dec 2026, third part).
+template <typename F>
+double bisection_root(const F& f, double a, double fa, double b, double fb, double tol) {
+  const bool neg_a = fa < 0;
+  double lo = a, flo = fa, hi = b, fhi = fb;
+  int kept = 0;  // > 0: lo kept by the last steps, < 0: hi kept (Illinois halves its value)
+  for (int it = 0; it < 12 && hi - lo > 0.1 * tol; ++it) {
+    double x = (lo * fhi - hi * flo) / (fhi - flo);
+    if (!(x > lo && x < hi)) x = 0.5 * (lo + hi);
+    const auto fx = f(x);
+    if (!fx) return plain_bisection(f, a, fa, b, tol);
+    if ((*fx < 0) == neg_a) {
+      lo = x;
+      flo = *fx;
+      if (kept < 0) fhi *= 0.5;
+      kept = -1;
+    } else {
+      hi = x;
+      fhi = *fx;
+      if (kept > 0) flo *= 0.5;
+      kept = 1;
+    }
+    // A zero at x: the bisection counts 0 as positive, and so does the bracket; but regula
+    // falsi cannot go on from a zero end, so the rest is done by the replay.
+    if (*fx == 0) break;
+  }
+  for (int it = 0; it < 200 && b - a > tol; ++it) {
+    const double m = 0.5 * (a + b);
+    if (m <= lo) {
+      a = m;
+    } else if (m >= hi) {
+      b = m;
+    } else {
+      const auto fm = f(m);
+      if (!fm) break;
+      if ((*fm < 0) == neg_a) {
+        a = lo = m;
+      } else {
+        b = hi = m;
+      }
+    }
+  }
+  return 0.5 * (a + b);
+}
+
 // Even-odd point-in-region test against the region's boundary polygons in (phi, h), with phi
 // periodic (the point is tried at every 2 pi shift inside a polygon's phi range). Each
 // polygon's edges are filed in bands of h, so that a query visits only the edges of its band:
@@ -527,19 +603,8 @@ class Mesher {
         return f.M + height * (std::cos(d) * f.t2 + std::sin(d) * f.n);
       };
       auto F = [&](double d) { return implicit_at(point(d)); };
-      auto refine = [&](double a, double fa, double b) {
-        for (int it = 0; it < 200 && b - a > tol; ++it) {
-          const double m = 0.5 * (a + b);
-          const auto fm = F(m);
-          if (!fm) break;
-          if ((*fm < 0) == (fa < 0)) {
-            a = m;
-            fa = *fm;
-          } else {
-            b = m;
-          }
-        }
-        return 0.5 * (a + b);
+      auto refine = [&](double a, double fa, double b, double fb) {
+        return bisection_root(F, a, fa, b, fb, tol);
       };
       // Sample angles exactly as ScanSurface::intersect_circle does (k dt, the last one 2 pi),
       // so that the root found is bit-identical to the whole-circle search.
@@ -565,13 +630,13 @@ class Mesher {
           if (*cp == 0.0)
             consider(tp);
           else if (*prev_pos != 0.0 && (*prev_pos < 0) != (*cp < 0))
-            consider(refine((k - 1) * dt, *prev_pos, tp));
+            consider(refine((k - 1) * dt, *prev_pos, tp, *cp));
         }
         if (prev_neg && cn) {
           if (*cn == 0.0)
             consider(tn);
           else if (*prev_neg != 0.0 && (*prev_neg < 0) != (*cn < 0))
-            consider(refine(tn, *cn, theta_neg(k - 1)));
+            consider(refine(tn, *cn, theta_neg(k - 1), *prev_neg));
         }
         prev_pos = cp;
         prev_neg = cn;
