@@ -851,11 +851,11 @@ class Mesher {
   std::unordered_map<std::uint64_t, int> index_;
   double cell_ = 1.0, max_len_ = 0.0;
   CellLists grid_;
-  Near near_;                        // gather's result
+  Near near_;                              // gather's result
   std::vector<std::int64_t> cell_coords_;  // gather's scratch
   int phi_cells_ = 1;
   double phi_cell_ = 2 * M_PI;
-  CellLists param_grid_;  // (phi, h) cells
+  CellLists param_grid_;                       // (phi, h) cells
   std::vector<int> wide_edges_;                // edges over more than kMaxParamCells cells
   std::vector<int> param_cols_, param_found_;  // scratch of param_bucket / gather_param
   std::vector<int> pool_;
