@@ -69,6 +69,82 @@ double point_segment_distance(const Vector3d& p, const Vector3d& a, const Vector
   return (a + t * ab - p).norm();
 }
 
+// Bisection on a bracketed sign change of f to `tol` (200 steps at most), stopping at an
+// undefined midpoint: the midpoint of the last bracket.
+template <typename F>
+double plain_bisection(const F& f, double a, double fa, double b, double tol) {
+  for (int it = 0; it < 200 && b - a > tol; ++it) {
+    const double m = 0.5 * (a + b);
+    const auto fm = f(m);
+    if (!fm) break;
+    if ((*fm < 0) == (fa < 0)) {
+      a = m;
+      fa = *fm;
+    } else {
+      b = m;
+    }
+  }
+  return 0.5 * (a + b);
+}
+
+// The root of the bisection: [a, b] halved while wider than `tol` (at most 200 times), keeping
+// the half whose ends differ in "F < 0", stopping early where F is undefined; the midpoint of
+// the last bracket. F(a) and F(b) are given (F(a) < 0 != F(b) < 0).
+//
+// The answer is that of the plain bisection loop, with fewer evaluations of F: the bisection
+// only needs to know on which side of the sign change each midpoint lies. So the sign change is
+// first located by the Illinois variant of regula falsi (a bracket [lo, hi] a tenth of
+// `tol` wide after ~5 evaluations, where the bisection takes ~17), and the bisection is then
+// replayed, evaluating F only at midpoints inside [lo, hi]. The replay takes F's sign on
+// [a, lo] and [hi, b] to be that of the ends, i.e. one sign change in [a, b] (a quarter of the
+// finest cell, the rotation construction's sample step); were there three, it could settle on
+// another of them than the plain loop. An undefined point met while locating runs the plain
+// loop. The sample head's meshes at its units, / 2 and / 4 are bit-identical
+// (docs/animation-meshes.md, speed work of 2 Dec 2026, third part).
+template <typename F>
+double bisection_root(const F& f, double a, double fa, double b, double fb, double tol) {
+  const bool neg_a = fa < 0;
+  double lo = a, flo = fa, hi = b, fhi = fb;
+  int kept = 0;  // > 0: lo kept by the last steps, < 0: hi kept (Illinois halves its value)
+  for (int it = 0; it < 12 && hi - lo > 0.1 * tol; ++it) {
+    double x = (lo * fhi - hi * flo) / (fhi - flo);
+    if (!(x > lo && x < hi)) x = 0.5 * (lo + hi);
+    const auto fx = f(x);
+    if (!fx) return plain_bisection(f, a, fa, b, tol);
+    if ((*fx < 0) == neg_a) {
+      lo = x;
+      flo = *fx;
+      if (kept < 0) fhi *= 0.5;
+      kept = -1;
+    } else {
+      hi = x;
+      fhi = *fx;
+      if (kept > 0) flo *= 0.5;
+      kept = 1;
+    }
+    // A zero at x: the bisection counts 0 as positive, and so does the bracket; but regula
+    // falsi cannot go on from a zero end, so the rest is done by the replay.
+    if (*fx == 0) break;
+  }
+  for (int it = 0; it < 200 && b - a > tol; ++it) {
+    const double m = 0.5 * (a + b);
+    if (m <= lo) {
+      a = m;
+    } else if (m >= hi) {
+      b = m;
+    } else {
+      const auto fm = f(m);
+      if (!fm) break;
+      if ((*fm < 0) == neg_a) {
+        a = lo = m;
+      } else {
+        b = hi = m;
+      }
+    }
+  }
+  return 0.5 * (a + b);
+}
+
 // Even-odd point-in-region test against the region's boundary polygons in (phi, h), with phi
 // periodic (the point is tried at every 2 pi shift inside a polygon's phi range). Each
 // polygon's edges are filed in bands of h, so that a query visits only the edges of its band:
@@ -274,11 +350,14 @@ class Mesher {
 
   // Front edges bucketed by the cell of their midpoint (lazy deletion), so the search near an
   // edge costs O(local front) instead of O(front).
+  std::int64_t cell_coord(double v) const {
+    return static_cast<std::int64_t>(std::floor(v / cell_)) & 0x1fffff;
+  }
+  static std::int64_t cell_key(std::int64_t cx, std::int64_t cy, std::int64_t cz) {
+    return (cx << 42) | (cy << 21) | cz;
+  }
   std::int64_t cell_key(const Vector3d& x) const {
-    const auto c = [&](double v) {
-      return static_cast<std::int64_t>(std::floor(v / cell_)) & 0x1fffff;
-    };
-    return (c(x.x()) << 42) | (c(x.y()) << 21) | c(x.z());
+    return cell_key(cell_coord(x.x()), cell_coord(x.y()), cell_coord(x.z()));
   }
   void bucket(int id) {
     const FEdge& e = edges_[id];
@@ -352,26 +431,39 @@ class Mesher {
     if (param_columns(lo, hi, cols) && j1 - j0 < kMaxParamCells) {
       for (int col : cols)
         for (long j = j0; j <= j1; ++j)
-          if (const auto it = param_grid_.find(param_key(col, j)); it != param_grid_.end())
-            for (int id : it->second) take(id);
+          if (const std::vector<int>* list = param_grid_.find(param_key(col, j)))
+            for (int id : *list) take(id);
     } else {
-      for (const auto& [key, list] : param_grid_)
+      for (const auto& list : param_grid_.lists())
         for (int id : list) take(id);
     }
     for (int id : wide_edges_) take(id);
   }
 
-  Near gather(int self, const Frame& f, double radius) {
-    Near nr;
+  // The front edges near the edge and their end points within `radius`, into near_ (reused:
+  // ~50,000 searches at a quarter of the sample units). Edges come in cell order (the tests
+  // using them are ANDs over all of them); nodes sorted, each once (the candidate list).
+  const Near& gather(int self, const Frame& f, double radius) {
+    Near& nr = near_;
+    nr.edges.clear();
+    nr.nodes.clear();
     const double r2 = radius * radius;
     const double reach = radius + 0.5 * max_len_;
     const int n = static_cast<int>(std::ceil(reach / cell_));
-    for (int dx = -n; dx <= n; ++dx)
-      for (int dy = -n; dy <= n; ++dy)
-        for (int dz = -n; dz <= n; ++dz) {
-          const auto it = grid_.find(cell_key(f.M + cell_ * Vector3d(dx, dy, dz)));
-          if (it == grid_.end()) continue;
-          auto& list = it->second;
+    // The cells of f.M + cell_ * (dx, dy, dz), each coordinate computed once per axis rather
+    // than once per cell (the same values: the sum is componentwise).
+    auto& coords = cell_coords_;
+    coords.clear();
+    for (int k = 0; k < 3; ++k)
+      for (int d = -n; d <= n; ++d) coords.push_back(cell_coord(f.M[k] + cell_ * d));
+    const int w = 2 * n + 1;
+    for (int dx = 0; dx < w; ++dx)
+      for (int dy = 0; dy < w; ++dy)
+        for (int dz = 0; dz < w; ++dz) {
+          std::vector<int>* found =
+              grid_.find(cell_key(coords[dx], coords[w + dy], coords[2 * w + dz]));
+          if (!found) continue;
+          auto& list = *found;
           std::size_t keep = 0;
           for (std::size_t k = 0; k < list.size(); ++k) {
             const int id = list[k];
@@ -390,7 +482,6 @@ class Mesher {
           }
           list.resize(keep);
         }
-    std::sort(nr.edges.begin(), nr.edges.end());
     std::sort(nr.nodes.begin(), nr.nodes.end());
     nr.nodes.erase(std::unique(nr.nodes.begin(), nr.nodes.end()), nr.nodes.end());
     return nr;
@@ -527,19 +618,8 @@ class Mesher {
         return f.M + height * (std::cos(d) * f.t2 + std::sin(d) * f.n);
       };
       auto F = [&](double d) { return implicit_at(point(d)); };
-      auto refine = [&](double a, double fa, double b) {
-        for (int it = 0; it < 200 && b - a > tol; ++it) {
-          const double m = 0.5 * (a + b);
-          const auto fm = F(m);
-          if (!fm) break;
-          if ((*fm < 0) == (fa < 0)) {
-            a = m;
-            fa = *fm;
-          } else {
-            b = m;
-          }
-        }
-        return 0.5 * (a + b);
+      auto refine = [&](double a, double fa, double b, double fb) {
+        return bisection_root(F, a, fa, b, fb, tol);
       };
       // Sample angles exactly as ScanSurface::intersect_circle does (k dt, the last one 2 pi),
       // so that the root found is bit-identical to the whole-circle search.
@@ -565,13 +645,13 @@ class Mesher {
           if (*cp == 0.0)
             consider(tp);
           else if (*prev_pos != 0.0 && (*prev_pos < 0) != (*cp < 0))
-            consider(refine((k - 1) * dt, *prev_pos, tp));
+            consider(refine((k - 1) * dt, *prev_pos, tp, *cp));
         }
         if (prev_neg && cn) {
           if (*cn == 0.0)
             consider(tn);
           else if (*prev_neg != 0.0 && (*prev_neg < 0) != (*cn < 0))
-            consider(refine(tn, *cn, theta_neg(k - 1)));
+            consider(refine(tn, *cn, theta_neg(k - 1), *prev_neg));
         }
         prev_pos = cp;
         prev_neg = cn;
@@ -600,7 +680,7 @@ class Mesher {
     const double u = std::clamp(size_at(pm), 0.62 * el, 1.6 * el);
     const double height = std::sqrt(std::max(u * u - 0.25 * el * el, 0.01 * el * el));
     const double radius = relaxed ? 6.0 * std::max(u, el) : 2.2 * std::max(u, el);
-    const Near nr = gather(e, f, radius);
+    const Near& nr = gather(e, f, radius);
     const double half = 0.5 * (f(B) - f(A)).norm();
     // Existing candidates ordered by their circumcentre on the bisector (Delaunay rule).
     std::vector<std::pair<double, int>> cand;
@@ -714,10 +794,12 @@ class Mesher {
   std::vector<FEdge> edges_;
   std::unordered_map<std::uint64_t, int> index_;
   double cell_ = 1.0, max_len_ = 0.0;
-  std::unordered_map<std::int64_t, std::vector<int>> grid_;
+  CellLists grid_;
+  Near near_;                              // gather's result
+  std::vector<std::int64_t> cell_coords_;  // gather's scratch
   int phi_cells_ = 1;
   double phi_cell_ = 2 * M_PI;
-  std::unordered_map<std::int64_t, std::vector<int>> param_grid_;  // (phi, h) cells
+  CellLists param_grid_;                       // (phi, h) cells
   std::vector<int> wide_edges_;                // edges over more than kMaxParamCells cells
   std::vector<int> param_cols_, param_found_;  // scratch of param_bucket / gather_param
   std::vector<int> pool_;

@@ -251,13 +251,40 @@ class Repair {
   bool faces_out(int t) const {
     if (ccw_in_parameters(t)) return true;
     const auto& f = T_[t];
-    const Vector3d &a = S_.pos[f[0]], &b = S_.pos[f[1]], &c = S_.pos[f[2]];
+    return agrees_with_surface(S_.pos[f[0]], S_.pos[f[1]], S_.pos[f[2]]);
+  }
+  // The normal of triangle (a, b, c) against the surface normal under its centroid. The
+  // scores of a bad triangle's candidates re-test the same turned-over triangles of its
+  // neighbourhood, so the answers are kept by the corner points (bit for bit: the same points
+  // give the same answer).
+  bool agrees_with_surface(const Vector3d& a, const Vector3d& b, const Vector3d& c) const {
+    const Corners key{{a, b, c}};
+    if (const auto it = agrees_.find(key); it != agrees_.end()) return it->second;
     const Vector3d n = (b - a).cross(c - a);
     const auto pr = surf_.project((a + b + c) / 3);
-    if (!pr) return false;
-    const auto under = surf_.point_normal(pr->phi, pr->h);
-    return under && n.dot(under->normal) > 0.3 * n.norm();
+    const auto under = pr ? surf_.point_normal(pr->phi, pr->h) : std::nullopt;
+    const bool agrees = under && n.dot(under->normal) > 0.3 * n.norm();
+    agrees_.emplace(key, agrees);
+    return agrees;
   }
+  struct Corners {
+    std::array<Vector3d, 3> p;
+    bool operator==(const Corners& o) const {
+      return std::memcmp(p.data(), o.p.data(), sizeof p) == 0;
+    }
+  };
+  struct CornersHash {
+    std::size_t operator()(const Corners& c) const {
+      std::uint64_t h = 0x9E3779B97F4A7C15ull, bits;
+      for (const Vector3d& v : c.p)
+        for (int k = 0; k < 3; ++k) {
+          std::memcpy(&bits, &v[k], sizeof bits);
+          h = (h ^ bits) * 0xBF58476D1CE4E5B9ull;
+          h ^= h >> 31;
+        }
+      return h;
+    }
+  };
   bool ccw_in_parameters(int t) const {
     const auto& f = T_[t];
     const Vector2d& a = S_.params[f[0]];
@@ -379,6 +406,8 @@ class Repair {
   // The same where it exceeds `floor`; otherwise some value <= floor. (The fold penalty only
   // lowers the value, so a trial point is decided after the first triangle at or below the
   // floor, before the costlier fold tests; the search's decisions are those of vertex_min.)
+  // Likewise the folds are counted only until the value is at or below the floor: the fold
+  // tests of turned-over triangles project onto the surface, ~half of the pattern search's time.
   double vertex_min_above(int v, double floor) const {
     double m = 1e9;
     for (int t : vt_[v]) {
@@ -386,7 +415,10 @@ class Repair {
       if (m <= floor) return m;
     }
     int folded = !simple_star(v);
-    for (int t : vt_[v]) folded += !faces_out(t);
+    for (int t : vt_[v]) {
+      if (m - M_PI * folded <= floor) break;
+      folded += !faces_out(t);
+    }
     return m - M_PI * folded;
   }
 
@@ -631,6 +663,7 @@ class Repair {
   double cell_ = 8.0;  // mm: 1.5 x the mean edge
   std::unordered_map<std::int64_t, std::vector<int>> grid_;
   std::unordered_set<std::uint64_t> stuck_states_;  // optimise: star states that gave no move
+  mutable std::unordered_map<Corners, bool, CornersHash> agrees_;  // agrees_with_surface
   mutable std::vector<std::uint64_t> stamp_;  // new_intersections: last epoch a triangle was seen
   mutable std::uint64_t stamp_epoch_ = 0;
 };

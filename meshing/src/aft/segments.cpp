@@ -2,7 +2,6 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
-#include <unordered_map>
 
 #include "aft_internal.h"
 #include "scanmesh/core/errors.h"
@@ -131,8 +130,9 @@ SegmentNodes initialise_segments(const RegionGraph& g, const LineSet& lines,
       owner[out.chains[s][k]] = static_cast<int>(s);
   double cell = 1e-3;
   for (double sp : out.spacing_mm) cell = std::max(cell, sp);
+  detail::CellLists grid;  // nodes by cell at the start of a sweep, in index order
   for (int it = 0; it < settings.relax_iterations; ++it) {
-    std::unordered_map<std::int64_t, std::vector<int>> grid;
+    grid.clear();
     auto key = [&](const Vector3d& x) {
       const std::int64_t i = static_cast<std::int64_t>(std::floor(x.x() / cell)) & 0x1fffff;
       const std::int64_t j = static_cast<std::int64_t>(std::floor(x.y() / cell)) & 0x1fffff;
@@ -150,19 +150,18 @@ SegmentNodes initialise_segments(const RegionGraph& g, const LineSet& lines,
         double target = 0.5 * (arc[k - 1] + arc[k + 1]);
         // tangent of the rail at this node
         const double ds = std::min(0.25 * sp, 0.5 * (arc[k + 1] - arc[k - 1]));
-        const auto xa =
-            surface.position(rails[s].at(arc[k] - ds).x(), rails[s].at(arc[k] - ds).y());
-        const auto xb =
-            surface.position(rails[s].at(arc[k] + ds).x(), rails[s].at(arc[k] + ds).y());
+        const Vector2d pa = rails[s].at(arc[k] - ds), pb = rails[s].at(arc[k] + ds);
+        const auto xa = surface.position(pa.x(), pa.y());
+        const auto xb = surface.position(pb.x(), pb.y());
         if (!xa || !xb) continue;
         const Vector3d tangent = (*xb - *xa).normalized();
         double push = 0;
         for (int dx = -1; dx <= 1; ++dx)
           for (int dy = -1; dy <= 1; ++dy)
             for (int dz = -1; dz <= 1; ++dz) {
-              const auto found = grid.find(key(pos[i] + cell * Vector3d(dx, dy, dz)));
-              if (found == grid.end()) continue;
-              for (int j : found->second) {
+              const std::vector<int>* found = grid.find(key(pos[i] + cell * Vector3d(dx, dy, dz)));
+              if (!found) continue;
+              for (int j : *found) {
                 if (owner[j] == static_cast<int>(s) || j == chain[k - 1] || j == chain[k + 1])
                   continue;
                 const Vector3d d = pos[i] - pos[j];
