@@ -8,6 +8,8 @@
 #include <limits>
 #include <numbers>
 
+#include "scanmesh/reconstruction/bisection.h"
+
 namespace scanmesh {
 
 namespace {
@@ -322,25 +324,6 @@ bool gauss_newton_step(const Eigen::Vector3d& ju, const Eigen::Vector3d& jv,
   return true;
 }
 
-// Bisection on a bracketed sign change of f; f is defined on the whole bracket by
-// construction (both ends defined and the step below the cell size), but a sample that is
-// undefined inside still ends the refinement at the last good bracket.
-template <typename F>
-double refine_root(const F& f, double a, double fa, double b, double tolerance) {
-  for (int it = 0; it < 200 && b - a > tolerance; ++it) {
-    const double m = 0.5 * (a + b);
-    const auto fm = f(m);
-    if (!fm) break;
-    if ((*fm < 0) == (fa < 0)) {
-      a = m;
-      fa = *fm;
-    } else {
-      b = m;
-    }
-  }
-  return 0.5 * (a + b);
-}
-
 // All sign changes of f over [t0, t1] sampled with `steps` intervals.
 template <typename F>
 std::vector<double> sampled_roots(const F& f, double t0, double t1, long steps, double tolerance) {
@@ -356,7 +339,9 @@ std::vector<double> sampled_roots(const F& f, double t0, double t1, long steps, 
       if (*cur == 0.0)
         roots.push_back(t);
       else if (*prev != 0.0 && ((*prev < 0) != (*cur < 0)))
-        roots.push_back(refine_root(f, prev_t, *prev, t, tolerance));
+        // f is defined on the whole bracket by construction (both ends defined and the step
+        // below the cell size); an undefined sample inside still ends the refinement.
+        roots.push_back(bisect_sign_change(f, prev_t, *prev, t, tolerance));
     }
     prev = cur;
     prev_t = t;

@@ -14,6 +14,7 @@
 
 #include "aft_internal.h"
 #include "scanmesh/core/errors.h"
+#include "scanmesh/reconstruction/bisection.h"
 
 namespace scanmesh::aft::detail {
 
@@ -69,24 +70,6 @@ double point_segment_distance(const Vector3d& p, const Vector3d& a, const Vector
   return (a + t * ab - p).norm();
 }
 
-// Bisection on a bracketed sign change of f to `tol` (200 steps at most), stopping at an
-// undefined midpoint: the midpoint of the last bracket.
-template <typename F>
-double plain_bisection(const F& f, double a, double fa, double b, double tol) {
-  for (int it = 0; it < 200 && b - a > tol; ++it) {
-    const double m = 0.5 * (a + b);
-    const auto fm = f(m);
-    if (!fm) break;
-    if ((*fm < 0) == (fa < 0)) {
-      a = m;
-      fa = *fm;
-    } else {
-      b = m;
-    }
-  }
-  return 0.5 * (a + b);
-}
-
 // The root of the bisection: [a, b] halved while wider than `tol` (at most 200 times), keeping
 // the half whose ends differ in "F < 0", stopping early where F is undefined; the midpoint of
 // the last bracket. F(a) and F(b) are given (F(a) < 0 != F(b) < 0).
@@ -110,7 +93,7 @@ double bisection_root(const F& f, double a, double fa, double b, double fb, doub
     double x = (lo * fhi - hi * flo) / (fhi - flo);
     if (!(x > lo && x < hi)) x = 0.5 * (lo + hi);
     const auto fx = f(x);
-    if (!fx) return plain_bisection(f, a, fa, b, tol);
+    if (!fx) return bisect_sign_change(f, a, fa, b, tol);
     if ((*fx < 0) == neg_a) {
       lo = x;
       flo = *fx;
