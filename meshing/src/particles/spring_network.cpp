@@ -49,6 +49,20 @@ struct Face {
   bool alive = true;
 };
 
+// Throws InvalidInputError for options no mesher can work with.
+void validate_options(const ParticleOptions& o) {
+  if (!(o.edge_length > 0.0) || !(o.rho > 0.0) || !(o.time_step_factor > 0.0) || !(o.d_min > 0.0) ||
+      !(o.d_max > 2.0 * o.d_min) || !(o.spring_stiffening >= 0.0) || !(o.moving_epsilon >= 0.0) ||
+      !(o.theta >= 0.0 && o.theta <= 1.0) || !(o.lambda >= 0.0 && o.lambda < 1.0) ||
+      !(o.special_factor > 0.0 && o.special_factor <= 1.0) || !(o.max_step > 0.0) ||
+      !(o.subdivision_accept >= 0.0 && o.subdivision_accept <= 1.0) || o.subdivision_trials < 0 ||
+      o.max_spread_particles < 0)
+    throw InvalidInputError(
+        "particles: impossible options (need edge_length, rho > 0, d_max > 2 d_min, theta in "
+        "[0,1], lambda in [0,1), special_factor in (0,1], subdivision_accept in [0,1], "
+        "subdivision_trials and max_spread_particles >= 0)");
+}
+
 double min_angle(const Vector3d& a, const Vector3d& b, const Vector3d& c) {
   auto ang = [](const Vector3d& p, const Vector3d& q, const Vector3d& r) {
     const Vector3d u = q - p, w = r - p;
@@ -490,26 +504,28 @@ struct SpringNetwork::Impl {
   // made (e.g. three valence-4 particles on a 12-particle sphere) and springs keep it.
   // All-pairs Coulomb repulsion on the surface (the Thomson problem) spreads the particles
   // evenly, and Delaunay flips give them the matching connectivity (on a sphere with 12
-  // particles: the icosahedron).
+  // particles: the icosahedron). Charges repel only within their own component; border
+  // particles stay where they are.
   void spread_particles(const ImplicitSurface& surface, int iterations) {
+    const std::vector<std::vector<int>> groups = particles_by_component();
     std::vector<int> alive;
-    for (std::size_t i = 0; i < verts.size(); ++i)
-      if (verts[i].alive) alive.push_back(static_cast<int>(i));
+    for (const auto& g : groups) alive.insert(alive.end(), g.begin(), g.end());
     std::vector<Vector3d> force(verts.size());
     for (int it = 0; it < iterations; ++it) {
       evaluate_all(surface);
       for (int a : alive) force[a].setZero();
-      for (std::size_t i = 0; i < alive.size(); ++i)
-        for (std::size_t j = i + 1; j < alive.size(); ++j) {
-          const Vector3d d = P(alive[i]) - P(alive[j]);
-          const double r2 = std::max(d.squaredNorm(), 1e-24);
-          const Vector3d f = d / (r2 * std::sqrt(r2));
-          force[alive[i]] += f;
-          force[alive[j]] -= f;
-        }
+      for (const auto& g : groups)
+        for (std::size_t i = 0; i < g.size(); ++i)
+          for (std::size_t j = i + 1; j < g.size(); ++j) {
+            const Vector3d d = P(g[i]) - P(g[j]);
+            const double r2 = std::max(d.squaredNorm(), 1e-24);
+            const Vector3d f = d / (r2 * std::sqrt(r2));
+            force[g[i]] += f;
+            force[g[j]] -= f;
+          }
       double largest = 0.0;
       for (int a : alive) {
-        if (!verts[a].defined || verts[a].f.gradient.squaredNorm() == 0.0) {
+        if (verts[a].boundary || !verts[a].defined || verts[a].f.gradient.squaredNorm() == 0.0) {
           force[a].setZero();
           continue;
         }
@@ -527,6 +543,26 @@ struct SpringNetwork::Impl {
       }
       delaunay_flips();
     }
+  }
+  // The alive particles grouped by connected component (through faces), in index order.
+  std::vector<std::vector<int>> particles_by_component() const {
+    std::vector<int> parent(verts.size());
+    for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = static_cast<int>(i);
+    auto find = [&](int x) {
+      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      return x;
+    };
+    for (const Face& f : faces)
+      if (f.alive) parent[find(f.v[1])] = find(f.v[0]), parent[find(f.v[2])] = find(f.v[0]);
+    std::vector<int> group_of(verts.size(), -1);
+    std::vector<std::vector<int>> groups;
+    for (std::size_t i = 0; i < verts.size(); ++i) {
+      if (!verts[i].alive) continue;
+      int& g = group_of[find(static_cast<int>(i))];
+      if (g < 0) g = static_cast<int>(groups.size()), groups.emplace_back();
+      groups[g].push_back(static_cast<int>(i));
+    }
+    return groups;
   }
   // Flips every edge whose two opposite angles (in 3D) sum to more than pi, until none.
   int delaunay_flips() {
@@ -1090,17 +1126,7 @@ SpringNetwork::SpringNetwork(const Mesh& start, const ParticleOptions& options)
     : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   m.o = options;
-  const ParticleOptions& o = options;
-  if (!(o.edge_length > 0.0) || !(o.rho > 0.0) || !(o.time_step_factor > 0.0) || !(o.d_min > 0.0) ||
-      !(o.d_max > 2.0 * o.d_min) || !(o.spring_stiffening >= 0.0) || !(o.moving_epsilon >= 0.0) ||
-      !(o.theta >= 0.0 && o.theta <= 1.0) || !(o.lambda >= 0.0 && o.lambda < 1.0) ||
-      !(o.special_factor > 0.0 && o.special_factor <= 1.0) || !(o.max_step > 0.0) ||
-      !(o.subdivision_accept >= 0.0 && o.subdivision_accept <= 1.0) || o.subdivision_trials < 0 ||
-      o.max_spread_particles < 0)
-    throw InvalidInputError(
-        "particles: impossible options (need edge_length, rho > 0, d_max > 2 d_min, theta in "
-        "[0,1], lambda in [0,1), special_factor in (0,1], subdivision_accept in [0,1], "
-        "subdivision_trials and max_spread_particles >= 0)");
+  validate_options(options);
   start.validate();
   for (const auto& p : start.positions) m.add_vertex(p);
   for (const auto& t : start.triangles) {
@@ -1353,8 +1379,8 @@ int SpringNetwork::relax(const ImplicitSurface& surface, std::size_t target_vert
       quiet = 0;
       continue;
     }
-    // The multilevel start asks for an exact count (a coarse particle becomes 4^k fine ones);
-    // otherwise the mean stretch decides.
+    // The subdivided start asks for a count (a coarse particle becomes about n^2 fine ones;
+    // decision 37); otherwise the mean stretch decides.
     const long missing = target_vertices > 0 ? static_cast<long>(target_vertices) -
                                                    static_cast<long>(m.alive_count())
                                              : 0;
@@ -1736,6 +1762,7 @@ std::vector<CoarseCandidate> coarse_candidates(const ImplicitSurface& surface,
 
 SpringNetwork relaxed_network(const ImplicitSurface& surface, const ParticleOptions& options,
                               int* iterations) {
+  validate_options(options);
   const Mesh fine = marching_tetrahedra(surface, options.start_spacing * options.edge_length);
   if (fine.triangles.empty())
     throw InvalidInputError("particles: the surface has no zero crossing inside its bounds");
@@ -1761,7 +1788,8 @@ SpringNetwork relaxed_network(const ImplicitSurface& surface, const ParticleOpti
   // Spheres (genus 0) only: a coarse mesh of a dozen particles cannot follow a torus' hole
   // (its subdivision did not converge in 3,000 steps).
   const bool spheres = fine_stats.euler_characteristic == 2LL * components;
-  if (closed && spheres && !options.adaptive && options.max_subdivision >= 2) {
+  if (closed && spheres && !options.adaptive && options.max_subdivision >= 2 &&
+      options.subdivision_trials > 0) {
     const auto candidates = coarse_candidates(surface, options, fine, &total);
     for (std::size_t i = 0;
          i < candidates.size() && static_cast<int>(i) < options.subdivision_trials &&
@@ -1779,7 +1807,7 @@ SpringNetwork relaxed_network(const ImplicitSurface& surface, const ParticleOpti
       if (same_topology(net, fine_stats, components)) keep_if_better(std::move(net));
     }
   }
-  if (best_uniformity.first < options.subdivision_accept) {
+  if (!best || best_uniformity.first < options.subdivision_accept) {
     SpringNetwork layered = layered_network(surface, options, fine, &total);
     if (!best || layered.converged()) keep_if_better(std::move(layered));
   }

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <set>
 #include <unordered_map>
 
@@ -136,6 +137,39 @@ TEST(SpringNetwork, SpreadEvenlyRestoresTheIcosahedron) {
   for (const auto& p : out.positions) EXPECT_NEAR((p - c).norm(), 1.0, 1e-9);
 }
 
+// Three separate spheres (the nearest one's distance field): the subdivided start spreads
+// each component's charges on their own (review of decision 37: charges that repelled across
+// components crowded each sphere's particles to one side; 38-71 fives, up to 35 sevens).
+TEST(SpringNetwork, SeparateSpheresEachGetTwelveFives) {
+  class ThreeSpheres final : public ImplicitSurface {
+   public:
+    std::optional<ImplicitValue> evaluate(const Vector3d& x) const override {
+      ImplicitValue best{.value = std::numeric_limits<double>::infinity()};
+      for (int k = 0; k < 3; ++k) {
+        const Vector3d d = x - Vector3d(3.0 * k, 0, 0);
+        if (d.norm() - 1.0 < best.value)
+          best = {.value = d.norm() - 1.0, .gradient = d.normalized()};
+      }
+      return best;
+    }
+    Eigen::AlignedBox3d bounds() const override {
+      return {Vector3d(-1.2, -1.2, -1.2), Vector3d(7.2, 1.2, 1.2)};
+    }
+  };
+  const ParticleMeshResult r = particle_mesh(ThreeSpheres(), {.edge_length = 0.2});
+  EXPECT_TRUE(r.converged);
+  std::vector<int> comp;
+  ASSERT_EQ(face_components(r.mesh, comp), 3);
+  for (int c = 0; c < 3; ++c) {
+    SCOPED_TRACE(c);
+    const Mesh part = component_mesh(r.mesh, comp, c);
+    expect_closed_manifold(part, 2);
+    auto valences = valence_histogram(part);
+    EXPECT_EQ(valences[5], 12);
+    EXPECT_EQ(valences[5] + valences[6], static_cast<int>(part.vertex_count()));
+  }
+}
+
 TEST(SpringNetwork, IsDeterministic) {
   const auto s = surface_of(sim::make_sphere(Vector3d::Zero(), 1.0), Vector3d::Constant(-1.2),
                             Vector3d::Constant(1.2));
@@ -214,6 +248,17 @@ TEST(SpringNetwork, RejectsImpossibleOptions) {
   EXPECT_THROW(SpringNetwork(tri, {.d_min = 0.8, .d_max = 1.2}), InvalidInputError);
   EXPECT_THROW(SpringNetwork(tri, {.subdivision_accept = 1.5}), InvalidInputError);
   EXPECT_THROW(SpringNetwork(tri, {.subdivision_trials = -1}), InvalidInputError);
+  // relaxed_network() checks too, before any network exists (an accept level below 0 once
+  // skipped every start and dereferenced an empty result).
+  const auto sphere = surface_of(sim::make_sphere(Vector3d::Zero(), 1.0), Vector3d::Constant(-1.2),
+                                 Vector3d::Constant(1.2));
+  EXPECT_THROW(particle_mesh(
+                   *sphere, {.edge_length = 0.3, .max_subdivision = 0, .subdivision_accept = -2.0}),
+               InvalidInputError);
+  EXPECT_THROW(
+      particle_mesh(*sphere, {.edge_length = 0.3,
+                              .subdivision_accept = std::numeric_limits<double>::quiet_NaN()}),
+      InvalidInputError);
   Mesh bad = tri;
   bad.triangles.push_back({0, 1, 2});  // the same orientation twice: not a manifold
   EXPECT_THROW(SpringNetwork(bad, {}), InvalidInputError);

@@ -78,8 +78,9 @@ struct ParticleOptions {
   //! keep it from converging (docs/particles.md, decision 34; 0: never).
   int flip_freeze = 500;
   std::uint64_t seed = 1;  //!< reserved (CLI --seed); the spring network uses no randomness
-  //! Progress display (optional): relax() of the final level calls it every 10 iterations
-  //! with (iterations, max_iterations), animate() once per frame with (frame, frames).
+  //! Progress display (optional): every full-resolution relax() calls it every 10 iterations
+  //! with (iterations, max_iterations) -- relaxed_network() may run a few in turn (decision
+  //! 37), coarse levels stay silent -- and animate() once per frame with (frame, frames).
   std::function<void(int done, int total)> progress;
 };
 
@@ -115,14 +116,16 @@ class SpringNetwork {
   //! Steps until converged (see ParticleOptions::convergence_tolerance) or max_iterations,
   //! then projects every vertex onto the surface (Newton, eq. 8 with P = 0). Returns the
   //! number of iterations. `target_vertices` > 0 replaces the mean-stretch density correction
-  //! (docs/particles.md, decision 13) by one towards exactly that many particles.
+  //! (docs/particles.md, decision 13) by one towards that many particles (up to 8 rounds of
+  //! collapses or splits; the count can end near it).
   int relax(const ImplicitSurface& surface, std::size_t target_vertices = 0);
   //! Newton projection of every vertex (no tangential motion).
   void project(const ImplicitSurface& surface);
   //! Spreads the particles evenly over the surface: `iterations` annealed steps of all-pairs
   //! Coulomb repulsion (tangential, Newton-projected), each followed by Delaunay flips (3D
-  //! opposite angles). Quadratic in the particle count: meant for coarse meshes (the
-  //! subdivided start, docs/particles.md decision 37).
+  //! opposite angles). Particles repel only within their component; border particles stay.
+  //! Quadratic in the particle count: meant for coarse meshes (the subdivided start,
+  //! docs/particles.md decision 37).
   void spread_evenly(const ImplicitSurface& surface, int iterations);
 
   //! The current mesh (compact indices, counter-clockwise from outside) and the id of each of
