@@ -49,6 +49,26 @@ struct Face {
   bool alive = true;
 };
 
+// Union-find over vertex indices, joined triangle by triangle: the connected components of
+// a triangle mesh (through shared vertices).
+class TriangleComponents {
+ public:
+  explicit TriangleComponents(std::size_t vertices) : parent_(vertices) {
+    for (std::size_t i = 0; i < vertices; ++i) parent_[i] = static_cast<int>(i);
+  }
+  void join(const std::array<int, 3>& t) {
+    parent_[root(t[1])] = root(t[0]);
+    parent_[root(t[2])] = root(t[0]);
+  }
+  int root(int x) {
+    while (parent_[x] != x) x = parent_[x] = parent_[parent_[x]];
+    return x;
+  }
+
+ private:
+  std::vector<int> parent_;
+};
+
 // Throws InvalidInputError for options no mesher can work with.
 void validate_options(const ParticleOptions& o) {
   if (!(o.edge_length > 0.0) || !(o.rho > 0.0) || !(o.time_step_factor > 0.0) || !(o.d_min > 0.0) ||
@@ -546,19 +566,14 @@ struct SpringNetwork::Impl {
   }
   // The alive particles grouped by connected component (through faces), in index order.
   std::vector<std::vector<int>> particles_by_component() const {
-    std::vector<int> parent(verts.size());
-    for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = static_cast<int>(i);
-    auto find = [&](int x) {
-      while (parent[x] != x) x = parent[x] = parent[parent[x]];
-      return x;
-    };
+    TriangleComponents components(verts.size());
     for (const Face& f : faces)
-      if (f.alive) parent[find(f.v[1])] = find(f.v[0]), parent[find(f.v[2])] = find(f.v[0]);
+      if (f.alive) components.join(f.v);
     std::vector<int> group_of(verts.size(), -1);
     std::vector<std::vector<int>> groups;
     for (std::size_t i = 0; i < verts.size(); ++i) {
       if (!verts[i].alive) continue;
-      int& g = group_of[find(static_cast<int>(i))];
+      int& g = group_of[components.root(static_cast<int>(i))];
       if (g < 0) g = static_cast<int>(groups.size()), groups.emplace_back();
       groups[g].push_back(static_cast<int>(i));
     }
@@ -1459,18 +1474,10 @@ bool SpringNetwork::converged() const { return impl_->converged; }
 namespace {
 
 int component_count(const Mesh& m) {
-  std::vector<int> parent(m.positions.size());
-  for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = static_cast<int>(i);
-  auto find = [&](int x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
-  for (const auto& t : m.triangles) {
-    parent[find(t[1])] = find(t[0]);
-    parent[find(t[2])] = find(t[0]);
-  }
+  TriangleComponents components(m.positions.size());
+  for (const auto& t : m.triangles) components.join(t);
   std::unordered_set<int> roots;
-  for (const auto& t : m.triangles) roots.insert(find(t[0]));
+  for (const auto& t : m.triangles) roots.insert(components.root(t[0]));
   return static_cast<int>(roots.size());
 }
 
