@@ -86,10 +86,17 @@ RegionSettings parse_region_settings(std::string_view source, const std::string&
         (key == "relax_iterations"    ? s.relax_iterations
          : key == "smooth_iterations" ? s.smooth_iterations
                                       : s.repair_rounds) = n;
-      } else if (key == "parallel_postprocessing") {
+      } else if (key == "repair_goal_deg") {
+        // Above ~45 deg the goal is out of reach almost everywhere and the repair would only
+        // burn time; below 10 it would leave the slivers it exists for.
+        const double g = positive(v, file, key);
+        if (g < 10 || g > 45) throw FileFormatError(file, "repair_goal_deg must be in 10..45");
+        s.repair_goal_deg = g;
+      } else if (key == "parallel_postprocessing" || key == "valence_flips") {
         if (!v.IsScalar() || (v.Scalar() != "true" && v.Scalar() != "false"))
-          throw FileFormatError(file, "parallel_postprocessing must be true or false");
-        s.parallel_postprocessing = v.Scalar() == "true";
+          throw FileFormatError(file, key + " must be true or false");
+        (key == "valence_flips" ? s.valence_flips : s.parallel_postprocessing) =
+            v.Scalar() == "true";
       } else if (key == "seed") {
         s.seed = v.as<std::uint64_t>();
       } else if (key == "regions") {

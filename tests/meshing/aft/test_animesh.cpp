@@ -87,9 +87,6 @@ TEST(AnimationMesh, IdenticalForIdenticalInputAndSeed) {
     EXPECT_EQ(a.am.mesh.positions[i], b.am.mesh.positions[i]);
 }
 
-}  // namespace
-}  // namespace scanmesh::aft
-
 // The sample head (configs/sim/head-lines.svg + head-regions.yaml) on the simulated head scanned
 // without occlusion/hair defects (configs/sim/head-scanner-ideal.yaml).
 #include "scanmesh/sim/range_scanner.h"
@@ -176,7 +173,10 @@ TEST(AnimationMeshHead, SerialPostprocessingIsValidAndMatchesTheParallelOne) {
   EXPECT_GE(q.min_angle_non_exempt_deg, 20.0) << q.to_text();
   EXPECT_GE(q.fraction_min_angle_ge_30, 0.95) << q.to_text();
   EXPECT_LT(q.max_vertex_offset_mm, 0.01);
-  EXPECT_EQ(serial.flips, parallel.flips);  // the flips see the same edges either way
+  // The max-min flips see the same edges either way; the valence flips do not: on the stitched
+  // mesh a segment node is inside (ideal valence 6), in its region's job on the border (4 on a
+  // straight line). So the counts may differ, by a few per cent (measured 558 vs 524).
+  EXPECT_NEAR(serial.flips, parallel.flips, 0.15 * parallel.flips);
   const double n_p = static_cast<double>(parallel.mesh.triangles.size());
   EXPECT_NEAR(static_cast<double>(serial.mesh.triangles.size()), n_p, 0.01 * n_p);
   EXPECT_NEAR(q.mean_q, qp.mean_q, 0.01);
@@ -206,6 +206,52 @@ TEST(AnimationMeshHead, HalfTheUnitsStillClosesEveryFrontWithoutIntersections) {
   EXPECT_LT(q.max_vertex_offset_mm, 0.01);
   EXPECT_GE(q.fraction_min_angle_ge_30, 0.95) << q.to_text();  // measured 98.7 %
   EXPECT_GE(q.min_angle_non_exempt_deg, 20.0) << q.to_text();  // measured 20.71 deg
+}
+
+}  // namespace
+}  // namespace scanmesh::aft
+
+// Valence flips (docs/animation-meshes.md, "Valence flips") make the sample head's mesh more
+// regular than the max-min-angle flips alone, without giving up any guarantee.
+TEST(AnimationMeshHead, ValenceFlipsGiveMoreRegularVertices) {
+  const test::SampleHead head;
+  RegionGraph g = analyze_regions(head.lines, head.surface);
+  apply_region_settings(g, head.settings, head.surface);
+  RegionSettings plain = head.settings;
+  plain.valence_flips = false;
+  const AnimationMesh with = build_animation_mesh(g, head.lines, head.surface, head.settings);
+  const AnimationMesh without = build_animation_mesh(g, head.lines, head.surface, plain);
+  const AnimationMeshQuality qw = evaluate_quality(with, head.surface, 2);
+  const AnimationMeshQuality qo = evaluate_quality(without, head.surface, 2);
+  const auto share_of_6 = [](const AnimationMeshQuality& q) {
+    int n = 0;
+    for (const auto& [valence, count] : q.valence_histogram) n += count;
+    return q.valence_histogram.count(6) ? double(q.valence_histogram.at(6)) / n : 0.0;
+  };
+  // Measured 0.610 vs 0.589; the mean q is level here (0.9360 vs 0.9359: at these coarse units
+  // a third of the triangles touch a line, whose nodes do not move) and rises from 0.952 to
+  // 0.960 at a quarter of the units (bench_aft).
+  EXPECT_GT(share_of_6(qw), share_of_6(qo) + 0.01);
+  EXPECT_GT(qw.mean_q, qo.mean_q - 0.002);
+  EXPECT_GE(qw.min_angle_non_exempt_deg, 20.0) << qw.to_text();
+  EXPECT_TRUE(check_mesh(with.mesh).defect_free());
+  std::printf("valence 6: %.3f with valence flips, %.3f without; mean q %.4f vs %.4f\n",
+              share_of_6(qw), share_of_6(qo), qw.mean_q, qo.mean_q);
+}
+
+// repair_goal_deg 30.5: the repair lifts the triangles between 20 and 30 deg as well.
+TEST(AnimationMeshHead, RepairGoalOf30LiftsAlmostEveryTriangleTo30) {
+  const test::SampleHead head;
+  RegionGraph g = analyze_regions(head.lines, head.surface);
+  RegionSettings s = head.settings;
+  s.repair_goal_deg = 30.5;
+  apply_region_settings(g, s, head.surface);
+  const AnimationMesh am = build_animation_mesh(g, head.lines, head.surface, s);
+  const AnimationMeshQuality q = evaluate_quality(am, head.surface, 2);
+  EXPECT_TRUE(check_mesh(am.mesh).defect_free());
+  EXPECT_LT(q.max_vertex_offset_mm, 0.01);
+  EXPECT_GE(q.fraction_min_angle_ge_30, 0.995) << q.to_text();  // measured 99.96 %
+  EXPECT_GE(q.min_angle_non_exempt_deg, 22.0) << q.to_text();   // measured 24.5 deg
 }
 
 }  // namespace

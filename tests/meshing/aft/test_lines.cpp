@@ -120,6 +120,13 @@ regions:
   EXPECT_FALSE(
       parse_region_settings("parallel_postprocessing: false", "r.yaml").parallel_postprocessing);
   EXPECT_THROW(parse_region_settings("parallel_postprocessing: maybe", "r.yaml"), FileFormatError);
+  EXPECT_TRUE(s.valence_flips);
+  EXPECT_FALSE(parse_region_settings("valence_flips: false", "r.yaml").valence_flips);
+  EXPECT_THROW(parse_region_settings("valence_flips: 1", "r.yaml"), FileFormatError);
+  EXPECT_DOUBLE_EQ(s.repair_goal_deg, 20.5);
+  EXPECT_DOUBLE_EQ(parse_region_settings("repair_goal_deg: 30.5", "r.yaml").repair_goal_deg, 30.5);
+  for (const char* bad : {"repair_goal_deg: 5", "repair_goal_deg: 60", "repair_goal_deg: x"})
+    EXPECT_THROW(parse_region_settings(bad, "r.yaml"), FileFormatError) << bad;
   EXPECT_EQ(s.strategy, EdgeStrategy::Random);
   ASSERT_EQ(s.regions.size(), 1u);
   EXPECT_DOUBLE_EQ(*s.regions[0].unit_mm, 2.5);

@@ -53,6 +53,9 @@ struct AnimationMesh {
   std::map<std::string, std::vector<int>> seams;  //!< seam line id -> ordered vertex list
   std::vector<RegionMeshStats> region_stats;
   int flips = 0;
+  //! Regions post-processed a second time without valence flips because they crossed with
+  //! them (docs/animation-meshes.md, "Valence flips").
+  int valence_flip_retries = 0;
   //! Small-angle repair: accepted operations (optimise, flip, collapse into one end, into the
   //! other, split), triangles left below 20 deg, of which at a sharp input corner.
   std::array<int, 5> repair_operations{};

@@ -93,7 +93,14 @@ struct RegionSettings {
   double min_unit_mm = 0.3;           //!< lower bound of the adaptive size
   int relax_iterations = 30;          //!< segment nodes "on rails"
   int smooth_iterations = 3;          //!< tangential smoothing of Steiner points
-  int repair_rounds = 8;              //!< small-angle repair sweeps (0: off)
+  //! Edge flips towards valence 6 (4 on a straight region border) before the smoothing
+  //! (docs/animation-meshes.md, "Valence flips"); false: max-min-angle flips only.
+  bool valence_flips = true;
+  int repair_rounds = 8;  //!< small-angle repair sweeps (0: off)
+  //! The repair attacks every triangle whose smallest angle is below this (deg): 20.5 keeps
+  //! the 20 deg guarantee at the least cost; 30.5 also lifts the triangles between 20 and 30
+  //! deg, ~3-4 times the post-processing time (docs/animation-meshes.md, "Repair goal").
+  double repair_goal_deg = 20.5;
   //! Flips, smoothing and repair per region in the parallel jobs (false: on the stitched mesh,
   //! serially, as the fallback does; docs/animation-meshes.md).
   bool parallel_postprocessing = true;
