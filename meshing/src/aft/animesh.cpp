@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <exception>
+#include <limits>
 #include <set>
 #include <sstream>
 #include <unordered_map>
@@ -32,6 +33,20 @@ constexpr double kValenceFlipFloor = 20.0 * M_PI / 180;
 constexpr double kSmoothingAngleFloor = 30.0 * M_PI / 180;
 // Valence flips only where the quad's two triangles, before and after, are within ~20 deg.
 const double kValenceFlipFlatness = std::cos(20.0 * M_PI / 180);
+
+// Distance of the midpoint of the chord x-y from the surface (projected from the nodes' mean
+// (phi, h)): what a flip to the diagonal x-y would cost in closeness to the surface. (The
+// max-min-angle flips do not ask: with "no further than 0.5 mm or the old diagonal" the sample
+// head's mesh-to-surface distance fell from 2.58 to 2.46 mm, but 3.2 % of its triangles were
+// below 30 deg instead of 2.4 %.)
+double chord_gap(const detail::NodeStore& store, const ScanSurface& surface, int x, int y) {
+  const Vector3d mid = 0.5 * (store.pos[x] + store.pos[y]);
+  Vector2d start;
+  start.x() = store.params[x].x() + 0.5 * wrap_angle(store.params[y].x() - store.params[x].x());
+  start.y() = 0.5 * (store.params[x].y() + store.params[y].y());
+  const auto pr = surface.project(mid, start);
+  return pr ? pr->distance : std::numeric_limits<double>::infinity();
+}
 
 // Edge flips that raise the smaller of the two triangles' minimum angles (max-min in 3D),
 // never across a constraint, never producing a triangle that faces away from the surface.
@@ -171,14 +186,6 @@ int valence_flips(std::vector<std::array<int, 3>>& T, const detail::NodeStore& s
     const int x = val[v] + d - ideal[v];
     return x * x;
   };
-  // Distance of the midpoint of x-y from the surface (projected from the nodes' mean (phi, h)).
-  auto chord_gap = [&](int x, int y) {
-    const Vector3d mid = 0.5 * (P[x] + P[y]);
-    Vector2d start = 0.5 * (store.params[x] + store.params[y]);
-    start.x() = store.params[x].x() + 0.5 * wrap_angle(store.params[y].x() - store.params[x].x());
-    const auto pr = surface.project(mid, start);
-    return pr ? pr->distance : 1e300;
-  };
   // A few full passes in key order (deterministic); each flip lowers the total deviation, so
   // the passes end; five were enough on the sample head at its units and at a quarter of them.
   int flips = 0;
@@ -230,8 +237,8 @@ int valence_flips(std::vector<std::array<int, 3>>& T, const detail::NodeStore& s
         continue;
       // No flip that takes the mesh further from the surface: the new diagonal's midpoint must
       // lie no further from it than the old one's (without this test the sample head's
-      // mesh-to-surface Hausdorff distance grew from 2.5 to 3.4 mm).
-      if (chord_gap(r, s) > chord_gap(a, b)) continue;
+      // mesh-to-surface Hausdorff distance grew from 2.5 to 3.4 mm, at the ear's rim).
+      if (chord_gap(store, surface, r, s) > chord_gap(store, surface, a, b)) continue;
       T[t1] = {r, a, s};
       T[t2] = {s, b, r};
       adj.erase(it);
