@@ -184,6 +184,7 @@ int run_animesh(const AnimeshArgs& a) {
   for (auto s : am.steiner) steiner += s;
   j["steiner_points"] = steiner;
   j["flips"] = am.flips;
+  j["valence_flip_retries"] = am.valence_flip_retries;
   j["small_angle_repair"] = {{"optimise", am.repair_operations[0]},
                              {"flip", am.repair_operations[1]},
                              {"collapse", am.repair_operations[2] + am.repair_operations[3]},

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <exception>
 #include <limits>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <unordered_map>
@@ -48,23 +49,92 @@ double chord_gap(const detail::NodeStore& store, const ScanSurface& surface, int
   return pr ? pr->distance : std::numeric_limits<double>::infinity();
 }
 
+// Edge -> its two triangles, kept up to date by the flips (both flip passes below use it).
+class FlipMesh {
+ public:
+  // The quad around an inner edge: t1 = (a, b, r) and t2 = (b, a, s), counter-clockwise.
+  struct Quad {
+    int a, b, r, s, t1, t2;
+  };
+
+  explicit FlipMesh(std::vector<std::array<int, 3>>& T) : T_(T) {
+    adj_.reserve(2 * T.size());
+    for (std::size_t t = 0; t < T.size(); ++t)
+      for (int k = 0; k < 3; ++k) {
+        auto& e = adj_.try_emplace(ukey(T[t][k], T[t][(k + 1) % 3]), std::array<int, 2>{-1, -1})
+                      .first->second;
+        (e[0] < 0 ? e[0] : e[1]) = static_cast<int>(t);
+      }
+  }
+  const std::unordered_map<std::uint64_t, std::array<int, 2>>& edges() const { return adj_; }
+  bool has_edge(int x, int y) const { return adj_.count(ukey(x, y)) > 0; }
+
+  // The quad of edge `key`; nullopt for a border edge, a gone edge or a degenerate quad.
+  std::optional<Quad> quad(std::uint64_t key) const {
+    const auto it = adj_.find(key);
+    if (it == adj_.end()) return std::nullopt;
+    const auto [t1, t2] = it->second;
+    if (t1 < 0 || t2 < 0) return std::nullopt;
+    const int p = static_cast<int>(key >> 32), q = static_cast<int>(key & 0xffffffffu);
+    const auto opposite = [&](int t) {
+      for (int k = 0; k < 3; ++k)
+        if (T_[t][k] != p && T_[t][k] != q) return T_[t][k];
+      return -1;
+    };
+    int a = p, b = q;  // oriented so that t1 = (a, b, r)
+    int k = 0;
+    while (T_[t1][k] != a) ++k;
+    if (T_[t1][(k + 1) % 3] != b) std::swap(a, b);
+    const int r = opposite(t1), s = opposite(t2);
+    if (r < 0 || s < 0 || r == s) return std::nullopt;
+    return Quad{a, b, r, s, t1, t2};
+  }
+
+  // a-b becomes r-s: t1 = (r, a, s), t2 = (s, b, r).
+  void flip(const Quad& f) {
+    T_[f.t1] = {f.r, f.a, f.s};
+    T_[f.t2] = {f.s, f.b, f.r};
+    adj_.erase(ukey(f.a, f.b));
+    adj_[ukey(f.r, f.s)] = {f.t1, f.t2};
+    // the outer edges a-s (was in t2) and b-r (was in t1) change owners
+    const auto reown = [&](int x, int y, int from, int to) {
+      for (int& t : adj_[ukey(x, y)])
+        if (t == from) t = to;
+    };
+    reown(f.a, f.s, f.t2, f.t1);
+    reown(f.b, f.r, f.t1, f.t2);
+  }
+
+ private:
+  std::vector<std::array<int, 3>>& T_;
+  std::unordered_map<std::uint64_t, std::array<int, 2>> adj_;
+};
+
+// The triangle (x, y, z) faces the side its corners' normals point to.
+bool faces_out(const std::vector<Vector3d>& P, const std::vector<Vector3d>& normal, int x, int y,
+               int z) {
+  const Vector3d n = (P[y] - P[x]).cross(P[z] - P[x]);
+  const Vector3d m = normal[x] + normal[y] + normal[z];
+  return n.dot(m) > 0.05 * n.norm() * m.norm();
+}
+
+// The smaller minimum angle of the quad's two triangles before and after its flip.
+double min_angle_before(const std::vector<Vector3d>& P, const FlipMesh::Quad& f) {
+  return std::min(min_angle(P[f.a], P[f.b], P[f.r]), min_angle(P[f.b], P[f.a], P[f.s]));
+}
+double min_angle_after(const std::vector<Vector3d>& P, const FlipMesh::Quad& f) {
+  return std::min(min_angle(P[f.r], P[f.a], P[f.s]), min_angle(P[f.s], P[f.b], P[f.r]));
+}
+
 // Edge flips that raise the smaller of the two triangles' minimum angles (max-min in 3D),
 // never across a constraint, never producing a triangle that faces away from the surface.
 int delaunay_flips(std::vector<std::array<int, 3>>& T, const std::vector<Vector3d>& P,
                    const std::vector<Vector3d>& normal,
                    const std::unordered_set<std::uint64_t>& constraint) {
   int flips = 0;
-  // Edge -> its two triangles, kept up to date by the flips. (It was rebuilt from T for every
-  // pass; a flip's outcome does not depend on the order of the two triangles, so this gives
-  // the same flips.)
-  std::unordered_map<std::uint64_t, std::array<int, 2>> adj;
-  adj.reserve(2 * T.size());
-  for (std::size_t t = 0; t < T.size(); ++t)
-    for (int k = 0; k < 3; ++k) {
-      auto& e = adj.try_emplace(ukey(T[t][k], T[t][(k + 1) % 3]), std::array<int, 2>{-1, -1})
-                    .first->second;
-      (e[0] < 0 ? e[0] : e[1]) = static_cast<int>(t);
-    }
+  // (The edge map was rebuilt from T for every pass; a flip's outcome does not depend on the
+  // order of the two triangles, so keeping it up to date gives the same flips.)
+  FlipMesh mesh(T);
   // The first pass visits every edge; later passes only the edges whose test can now give
   // another answer: the edges of the quads flipped in the pass before, and edges that were
   // refused because their flipped diagonal r-s already existed, once that r-s is flipped away.
@@ -75,8 +145,8 @@ int delaunay_flips(std::vector<std::array<int, 3>>& T, const std::vector<Vector3
   // and angle figures. Key order in every pass, so the result is deterministic.
   std::unordered_map<std::uint64_t, std::vector<std::uint64_t>> blocked_by;
   std::vector<std::uint64_t> keys, dirty;
-  keys.reserve(adj.size());
-  for (const auto& kv : adj) keys.push_back(kv.first);
+  keys.reserve(mesh.edges().size());
+  for (const auto& kv : mesh.edges()) keys.push_back(kv.first);
   for (int pass = 0; pass < 30; ++pass) {
     std::sort(keys.begin(), keys.end());
     keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
@@ -84,50 +154,16 @@ int delaunay_flips(std::vector<std::array<int, 3>>& T, const std::vector<Vector3
     int pass_flips = 0;
     for (const std::uint64_t key : keys) {
       if (constraint.count(key)) continue;
-      const auto it = adj.find(key);
-      if (it == adj.end()) continue;
-      const auto [t1, t2] = it->second;
-      if (t1 < 0 || t2 < 0) continue;
-      const int p = static_cast<int>(key >> 32), q = static_cast<int>(key & 0xffffffffu);
-      auto opposite = [&](int t) {
-        for (int k = 0; k < 3; ++k)
-          if (T[t][k] != p && T[t][k] != q) return T[t][k];
-        return -1;
-      };
-      // orient so that t1 = (p, q, r)
-      int a = p, b = q;
-      {
-        int k = 0;
-        while (T[t1][k] != a) ++k;
-        if (T[t1][(k + 1) % 3] != b) std::swap(a, b);
-      }
-      const int r = opposite(t1), s = opposite(t2);
-      if (r < 0 || s < 0 || r == s) continue;
-      if (adj.count(ukey(r, s))) {
+      const auto f = mesh.quad(key);
+      if (!f) continue;
+      const auto [a, b, r, s, t1, t2] = *f;
+      if (mesh.has_edge(r, s)) {
         blocked_by[ukey(r, s)].push_back(key);
         continue;
       }
-      const double before = std::min(min_angle(P[a], P[b], P[r]), min_angle(P[b], P[a], P[s]));
-      const double after = std::min(min_angle(P[r], P[a], P[s]), min_angle(P[s], P[b], P[r]));
-      if (after <= before + 1e-6) continue;
-      auto faces_out = [&](int x, int y, int z) {
-        const Vector3d n = (P[y] - P[x]).cross(P[z] - P[x]);
-        const Vector3d m = normal[x] + normal[y] + normal[z];
-        return n.dot(m) > 0.05 * n.norm() * m.norm();
-      };
-      if (!faces_out(r, a, s) || !faces_out(s, b, r)) continue;
-      T[t1] = {r, a, s};
-      T[t2] = {s, b, r};
-      adj.erase(it);
-      adj[ukey(r, s)] = {t1, t2};
-      // the outer edges a-s (was in t2) and b-r (was in t1) change owners
-      auto reown = [&](int x, int y, int from, int to) {
-        auto& e = adj[ukey(x, y)];
-        for (int& v : e)
-          if (v == from) v = to;
-      };
-      reown(a, s, t2, t1);
-      reown(b, r, t1, t2);
+      if (min_angle_after(P, *f) <= min_angle_before(P, *f) + 1e-6) continue;
+      if (!faces_out(P, normal, r, a, s) || !faces_out(P, normal, s, b, r)) continue;
+      mesh.flip(*f);
       for (const std::uint64_t k : {ukey(r, s), ukey(a, s), ukey(s, b), ukey(b, r), ukey(r, a)})
         dirty.push_back(k);
       if (const auto bl = blocked_by.find(key); bl != blocked_by.end()) {
@@ -143,32 +179,10 @@ int delaunay_flips(std::vector<std::array<int, 3>>& T, const std::vector<Vector3
   return flips;
 }
 
-// Edge flips towards regular valences, as isotropic remeshers do (Botsch & Kobbelt): a flip is
-// taken if it lowers the summed squared deviation of the four corners from their ideal valence,
-// 6 inside the mesh and 1 + round(angle sum / 60 deg) on its border (a region's corner or
-// straight border at a segment node: 4 there, not 6). The AFT's layers leave ~35 % irregular
-// Steiner points and the max-min-angle flips cannot see valence; this pass raised the mean q at a
-// quarter of the sample units from 0.946 to 0.965 and lowered the triangles below 30 deg from 0.63
-// to 0.50 % (with the smoothing's quality rule below). A flip may lower the pair's smallest angle,
-// but not below `floor_rad` (or the smallest angle before it); the Delaunay flips after the
-// smoothing restore the max-min angle where the valence gain was not worth it.
-int valence_flips(std::vector<std::array<int, 3>>& T, const detail::NodeStore& store,
-                  const ScanSurface& surface, const std::unordered_set<std::uint64_t>& constraint,
-                  double floor_rad) {
-  const std::vector<Vector3d>& P = store.pos;
-  const std::vector<Vector3d>& normal = store.normal;
-  std::vector<int> val(P.size(), 0);
-  std::unordered_map<std::uint64_t, std::array<int, 2>> adj;
-  for (std::size_t t = 0; t < T.size(); ++t)
-    for (int k = 0; k < 3; ++k) {
-      auto& e = adj.try_emplace(ukey(T[t][k], T[t][(k + 1) % 3]), std::array<int, 2>{-1, -1})
-                    .first->second;
-      (e[0] < 0 ? e[0] : e[1]) = static_cast<int>(t);
-    }
-  for (const auto& kv : adj) {
-    ++val[kv.first >> 32];
-    ++val[kv.first & 0xffffffffu];
-  }
+// The ideal valence of every vertex: 6 inside the mesh, 1 + round(angle sum / 60 deg) on its
+// border (4 at a straight border, 3 at a right-angled corner).
+std::vector<int> ideal_valences(const std::vector<std::array<int, 3>>& T,
+                                const std::vector<Vector3d>& P, const FlipMesh& mesh) {
   std::vector<double> angle_sum(P.size(), 0);
   for (const auto& t : T)
     for (int k = 0; k < 3; ++k) {
@@ -176,62 +190,63 @@ int valence_flips(std::vector<std::array<int, 3>>& T, const detail::NodeStore& s
       angle_sum[t[k]] += std::acos(std::clamp(u.dot(w) / (u.norm() * w.norm()), -1.0, 1.0));
     }
   std::vector<char> on_border(P.size(), 0);
-  for (const auto& [key, tt] : adj)
+  for (const auto& [key, tt] : mesh.edges())
     if (tt[1] < 0) on_border[key >> 32] = on_border[key & 0xffffffffu] = 1;
   std::vector<int> ideal(P.size(), 6);
   for (std::size_t v = 0; v < P.size(); ++v)
     if (on_border[v]) ideal[v] = static_cast<int>(std::lround(angle_sum[v] / (M_PI / 3))) + 1;
+  return ideal;
+}
+
+// Edge flips towards regular valences, as isotropic remeshers do (Botsch & Kobbelt): a flip is
+// taken if it lowers the summed squared deviation of the four corners from their ideal valence
+// (ideal_valences; at a segment node in its region's job 4, not 6). The AFT's layers leave ~35 %
+// irregular Steiner points and the max-min-angle flips cannot see valence; with the smoothing's
+// quality rule below this raised the mean q at a quarter of the sample units from 0.946 to 0.960
+// and lowered the triangles below 30 deg from 0.63 to 0.56 %. A flip may lower the pair's
+// smallest angle, but not below `floor_rad` (or the smallest angle before it); the max-min flips
+// after the smoothing restore the angles where the valence gain was not worth it.
+int valence_flips(std::vector<std::array<int, 3>>& T, const detail::NodeStore& store,
+                  const ScanSurface& surface, const std::unordered_set<std::uint64_t>& constraint,
+                  double floor_rad) {
+  const std::vector<Vector3d>& P = store.pos;
+  FlipMesh mesh(T);
+  std::vector<int> val(P.size(), 0);
+  for (const auto& kv : mesh.edges()) {
+    ++val[kv.first >> 32];
+    ++val[kv.first & 0xffffffffu];
+  }
+  const std::vector<int> ideal = ideal_valences(T, P, mesh);
   // Squared deviation of v's valence, changed by d, from its ideal.
-  auto dev = [&](int v, int d) {
+  const auto dev = [&](int v, int d) {
     const int x = val[v] + d - ideal[v];
     return x * x;
+  };
+  const auto unit_normal = [&](int x, int y, int z) {
+    return (P[y] - P[x]).cross(P[z] - P[x]).normalized();
   };
   // A few full passes in key order (deterministic); each flip lowers the total deviation, so
   // the passes end; five were enough on the sample head at its units and at a quarter of them.
   int flips = 0;
   for (int pass = 0; pass < 5; ++pass) {
     std::vector<std::uint64_t> keys;
-    for (const auto& kv : adj) keys.push_back(kv.first);
+    for (const auto& kv : mesh.edges()) keys.push_back(kv.first);
     std::sort(keys.begin(), keys.end());
-    int pf = 0;
+    int pass_flips = 0;
     for (const std::uint64_t key : keys) {
       if (constraint.count(key)) continue;
-      const auto it = adj.find(key);
-      if (it == adj.end()) continue;
-      const auto [t1, t2] = it->second;
-      if (t1 < 0 || t2 < 0) continue;
-      const int p = static_cast<int>(key >> 32), q = static_cast<int>(key & 0xffffffffu);
-      auto opposite = [&](int t) {
-        for (int k = 0; k < 3; ++k)
-          if (T[t][k] != p && T[t][k] != q) return T[t][k];
-        return -1;
-      };
-      int a = p, b = q;
-      {
-        int k = 0;
-        while (T[t1][k] != a) ++k;
-        if (T[t1][(k + 1) % 3] != b) std::swap(a, b);
-      }
-      const int r = opposite(t1), s = opposite(t2);
-      if (r < 0 || s < 0 || r == s || adj.count(ukey(r, s))) continue;
-      const int before_dev = dev(a, 0) + dev(b, 0) + dev(r, 0) + dev(s, 0);
-      const int after_dev = dev(a, -1) + dev(b, -1) + dev(r, 1) + dev(s, 1);
-      if (after_dev >= before_dev) continue;
-      const double before = std::min(min_angle(P[a], P[b], P[r]), min_angle(P[b], P[a], P[s]));
-      const double after = std::min(min_angle(P[r], P[a], P[s]), min_angle(P[s], P[b], P[r]));
-      if (after < std::min(before, floor_rad)) continue;
-      auto faces_out = [&](int x, int y, int z) {
-        const Vector3d n = (P[y] - P[x]).cross(P[z] - P[x]);
-        const Vector3d m = normal[x] + normal[y] + normal[z];
-        return n.dot(m) > 0.05 * n.norm() * m.norm();
-      };
-      if (!faces_out(r, a, s) || !faces_out(s, b, r)) continue;
+      const auto f = mesh.quad(key);
+      if (!f) continue;
+      const auto [a, b, r, s, t1, t2] = *f;
+      if (mesh.has_edge(r, s)) continue;
+      if (dev(a, -1) + dev(b, -1) + dev(r, 1) + dev(s, 1) >=
+          dev(a, 0) + dev(b, 0) + dev(r, 0) + dev(s, 0))
+        continue;
+      if (min_angle_after(P, *f) < std::min(min_angle_before(P, *f), floor_rad)) continue;
+      if (!faces_out(P, store.normal, r, a, s) || !faces_out(P, store.normal, s, b, r)) continue;
       // Only nearly flat quads: across a crease a valence flip can fold the surface (it made
       // 3 crossing triangle pairs on the sample head at the ear rims without this test), and
       // there the edge is where the shape needs it, not where the valences would like it.
-      const auto unit_normal = [&](int x, int y, int z) {
-        return (P[y] - P[x]).cross(P[z] - P[x]).normalized();
-      };
       if (unit_normal(a, b, r).dot(unit_normal(b, a, s)) < kValenceFlipFlatness ||
           unit_normal(r, a, s).dot(unit_normal(s, b, r)) < kValenceFlipFlatness)
         continue;
@@ -239,25 +254,15 @@ int valence_flips(std::vector<std::array<int, 3>>& T, const detail::NodeStore& s
       // lie no further from it than the old one's (without this test the sample head's
       // mesh-to-surface Hausdorff distance grew from 2.5 to 3.4 mm, at the ear's rim).
       if (chord_gap(store, surface, r, s) > chord_gap(store, surface, a, b)) continue;
-      T[t1] = {r, a, s};
-      T[t2] = {s, b, r};
-      adj.erase(it);
-      adj[ukey(r, s)] = {t1, t2};
-      auto reown = [&](int x, int y, int from, int to) {
-        auto& e = adj[ukey(x, y)];
-        for (int& v : e)
-          if (v == from) v = to;
-      };
-      reown(a, s, t2, t1);
-      reown(b, r, t1, t2);
+      mesh.flip(*f);
       --val[a];
       --val[b];
       ++val[r];
       ++val[s];
-      ++pf;
+      ++pass_flips;
     }
-    flips += pf;
-    if (!pf) break;
+    flips += pass_flips;
+    if (!pass_flips) break;
   }
   return flips;
 }
