@@ -112,7 +112,8 @@ bool triangles_intersect(const std::vector<Vector3d>& P, const std::array<int, 3
   return false;
 }
 
-std::size_t count_intersecting_faces(const Mesh& mesh, const std::vector<int>* labels) {
+std::size_t count_intersecting_faces(const Mesh& mesh, const std::vector<int>* labels,
+                                     const std::vector<char>* involved) {
   const auto& P = mesh.positions;
   const auto& F = mesh.triangles;
   if (F.size() < 2) return 0;
@@ -161,6 +162,7 @@ std::size_t count_intersecting_faces(const Mesh& mesh, const std::vector<int>* l
       for (std::size_t j = i + 1; j < list.size(); ++j) {
         const int f = list[i], g = list[j];
         if (labels && (*labels)[f] == (*labels)[g]) continue;
+        if (involved && !(*involved)[f] && !(*involved)[g]) continue;
         const Vector3d l = lo[f].cwiseMax(lo[g]), h = hi[f].cwiseMin(hi[g]);
         if ((l.array() > h.array()).any()) continue;
         // count the pair only in the cell holding the low corner of the box overlap

@@ -44,8 +44,10 @@ struct MeshCheckReport {
 MeshCheckReport check_mesh(const Mesh& mesh, const MeshCheckOptions& options = {});
 
 //! Intersecting face pairs, as check_mesh counts them; with `labels` (one per face) only the
-//! pairs of faces with different labels (e.g. crossings between the regions of a mesh).
-std::size_t count_intersecting_faces(const Mesh& mesh, const std::vector<int>* labels = nullptr);
+//! pairs of faces with different labels (e.g. crossings between the regions of a mesh); with
+//! `involved` (one flag per face) only the pairs with at least one flagged face.
+std::size_t count_intersecting_faces(const Mesh& mesh, const std::vector<int>* labels = nullptr,
+                                     const std::vector<char>* involved = nullptr);
 
 //! Faces f and g (indices into P) intersect improperly: more than touching at shared corners or
 //! along a shared edge (the self-intersection predicate of check_mesh; double precision).
