@@ -55,7 +55,7 @@ TEST(MeshCheck, CrossingTrianglesWithoutSharedCornerIntersect) {
   EXPECT_EQ(check_mesh(m).self_intersections, 1u);
 }
 
-TEST(MeshCheck, LabelledCountSkipsPairsWithinOneLabel) {
+TEST(MeshCheck, LabelledAndMaskedCountsSkipPairs) {
   // Two crossing pairs: faces 0-1 (labels 7 and 8) and faces 2-3 (both label 9), far apart.
   Mesh m;
   m.positions = {{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0.5, 0.5, -1}, {0.5, 0.5, 1}, {3, 3, 0}};
@@ -66,6 +66,11 @@ TEST(MeshCheck, LabelledCountSkipsPairsWithinOneLabel) {
   EXPECT_EQ(count_intersecting_faces(m, &labels), 1u);
   const std::vector<int> one_label(4, 3);
   EXPECT_EQ(count_intersecting_faces(m, &one_label), 0u);
+  // Only pairs with an involved face: one face of the second pair, then none.
+  const std::vector<char> third{0, 0, 1, 0}, none(4, 0);
+  EXPECT_EQ(count_intersecting_faces(m, nullptr, &third), 1u);
+  EXPECT_EQ(count_intersecting_faces(m, nullptr, &none), 0u);
+  EXPECT_EQ(count_intersecting_faces(m, &labels, &third), 0u);  // that pair shares label 9
 }
 
 TEST(MeshCheck, FoldThroughSharedCornerIntersects) {
