@@ -15,6 +15,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <map>
 #include <optional>
@@ -610,10 +611,27 @@ void bench_fine(const aft::LineSet& lines, const ScanSurface& surface,
       100 * std::max(0.0, tf - tn) / tf);
 }
 
+// --fine-runs N: only the fine meshing, N times, one line of triangles and seconds per run and
+// nothing else in the process (for perf: the quality evaluation would dominate a profile).
+void time_fine_runs(const aft::LineSet& lines, const ScanSurface& surface,
+                    const aft::RegionSettings& settings, int runs) {
+  const aft::RegionSettings fine = settings.with_units_scaled(0.25);
+  aft::RegionGraph gf = aft::analyze_regions(lines, surface);
+  aft::apply_region_settings(gf, fine, surface);
+  for (int run = 0; run < runs; ++run) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const aft::AnimationMesh m = aft::build_animation_mesh(gf, lines, surface, fine);
+    const double t = seconds_since(t0);
+    std::printf("%zu triangles in %.3f s = %.0f triangles/s\n", m.mesh.triangles.size(), t,
+                m.mesh.triangles.size() / t);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  // --aft-only skips the CGAL rows (~70 s) for quick looks at the AFT's own figures.
+  // --aft-only skips the CGAL rows (~70 s) for quick looks at the AFT's own figures;
+  // --fine-runs N times the fine meshing alone.
   const bool aft_only = argc > 1 && std::string(argv[1]) == "--aft-only";
   const std::string src = SCANMESH_SOURCE_DIR;
   const auto config =
@@ -626,6 +644,10 @@ int main(int argc, char** argv) {
   const aft::RegionSettings settings =
       aft::read_region_settings(src + "/configs/sim/head-regions.yaml");
   aft::apply_region_settings(g, settings, surface);
+  if (argc > 2 && std::string(argv[1]) == "--fine-runs") {
+    time_fine_runs(lines, surface, settings, std::max(1, std::atoi(argv[2])));
+    return 0;
+  }
 
   std::printf("%-36s %8s %9s %9s %8s %8s %7s %9s %9s\n", "method", "time_s", "vertices",
               "triangles", "min_ang", "%<30deg", "mean_q", "H_m->s", "H_s->m");
