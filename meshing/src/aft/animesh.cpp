@@ -322,9 +322,22 @@ void smooth_steiner_points(const std::vector<std::array<int, 3>>& tris, detail::
     store.pos[v] = new_pos;
     return q_new > q_old + 1e-12;
   };
+  // A point that stayed put stays put again while no point of its star has moved since: its
+  // evaluation would repeat exactly (same star, same start). Skipping those is exact.
+  std::vector<long> moved_at(store.pos.size(), -1), stayed_at(store.pos.size(), -1);
+  long step = 0;
+  const auto star_moved_since = [&](std::size_t v, long since) {
+    for (int t : vt[v])
+      for (int w : tris[t])
+        if (moved_at[w] > since) return true;
+    return false;
+  };
   for (int it = 0; it < iterations; ++it)
     for (std::size_t v = boundary_nodes; v < store.pos.size(); ++v) {
       if (vt[v].empty()) continue;
+      ++step;
+      if (stayed_at[v] >= 0 && !star_moved_since(v, stayed_at[v])) continue;
+      stayed_at[v] = step;  // until the move below is kept
       Vector3d c = Vector3d::Zero();
       int n = 0;
       for (int t : vt[v])
@@ -359,6 +372,9 @@ void smooth_steiner_points(const std::vector<std::array<int, 3>>& tris, detail::
         store.params[v] = old_param;
         store.pos[v] = old_pos;
         store.normal[v] = old_n;
+      } else {
+        moved_at[v] = step;
+        stayed_at[v] = -1;
       }
     }
 }
