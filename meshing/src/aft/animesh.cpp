@@ -11,6 +11,7 @@
 #include <tuple>
 #include <unordered_map>
 #include <unordered_set>
+#include <utility>
 
 #include "aft_internal.h"
 #include "scanmesh/core/errors.h"
@@ -498,11 +499,15 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
     auto t0 = Clock::now();
     out.flips = delaunay_flips(tris, nodes.pos, nodes.normal, constraint);
     out.seconds.flips = seconds_since(t0);
-    t0 = Clock::now();
     // Kept for a second try without valence flips (below).
-    const std::vector<std::array<int, 3>> tris_flipped = tris;
-    const std::vector<int> labels_flipped = labels;
-    const detail::NodeStore nodes_flipped = nodes;
+    std::vector<std::array<int, 3>> tris_flipped;
+    std::vector<int> labels_flipped;
+    detail::NodeStore nodes_flipped;
+    if (settings.valence_flips) {
+      tris_flipped = tris;
+      labels_flipped = labels;
+      nodes_flipped = nodes;
+    }
     std::vector<char> flipped_corners;  // the valence flips' quad corners
     const auto finish = [&](bool with_valence_flips) {
       auto t1 = Clock::now();
@@ -529,9 +534,9 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
     // crosses. (Checking every triangle of the region cost 5 % of the run at a quarter of the
     // sample units.)
     if (valence > 0 && count_crossings_near(tris, nodes.pos, flipped_corners) > 0) {
-      tris = tris_flipped;
-      labels = labels_flipped;
-      nodes = nodes_flipped;
+      tris = std::move(tris_flipped);
+      labels = std::move(labels_flipped);
+      nodes = std::move(nodes_flipped);
       std::tie(valence, later_flips) = finish(false);
       ++out.valence_flip_retries;
     }
