@@ -561,6 +561,20 @@ std::vector<Eigen::Vector2d> band_pixels(const SM& band,
   return out;
 }
 
+// Builds the animation mesh three times (same input and seed: the same mesh) into `out`; the
+// shortest wall time, since single runs on the 2-core machine vary by +-5 %.
+double build_best_of_3(const aft::RegionGraph& g, const aft::LineSet& lines,
+                       const ScanSurface& surface, const aft::RegionSettings& settings,
+                       aft::AnimationMesh* out) {
+  double best = 1e300;
+  for (int run = 0; run < 3; ++run) {
+    const auto t0 = std::chrono::steady_clock::now();
+    *out = aft::build_animation_mesh(g, lines, surface, settings);
+    best = std::min(best, seconds_since(t0));
+  }
+  return best;
+}
+
 // 3. AFT speed at a fine unit size (all units / 4): best of three runs, as for the sample head,
 // since a single 0.4 s run on the 2-core machine varied by +-5 % between runs.
 void bench_fine(const aft::LineSet& lines, const ScanSurface& surface,
@@ -568,18 +582,8 @@ void bench_fine(const aft::LineSet& lines, const ScanSurface& surface,
   aft::RegionSettings fine = settings.with_units_scaled(0.25);
   aft::RegionGraph gf = aft::analyze_regions(lines, surface);
   aft::apply_region_settings(gf, fine, surface);
-  // Best of three (the meshes are identical: same input, same seed).
-  const auto timed_best_of_3 = [&](aft::AnimationMesh* out) {
-    double best = 1e300;
-    for (int run = 0; run < 3; ++run) {
-      const auto t0 = std::chrono::steady_clock::now();
-      *out = aft::build_animation_mesh(gf, lines, surface, fine);
-      best = std::min(best, seconds_since(t0));
-    }
-    return best;
-  };
   aft::AnimationMesh amf;
-  const double tf = timed_best_of_3(&amf);
+  const double tf = build_best_of_3(gf, lines, surface, fine, &amf);
   std::printf("AFT fine (units / 4): %zu triangles in %.3f s (best of 3) = %.0f triangles/s\n",
               amf.mesh.triangles.size(), tf, amf.mesh.triangles.size() / tf);
   std::printf(
@@ -601,7 +605,7 @@ void bench_fine(const aft::LineSet& lines, const ScanSurface& surface,
   }
   fine.repair_rounds = 0;
   aft::AnimationMesh amn;
-  const double tn = timed_best_of_3(&amn);
+  const double tn = build_best_of_3(gf, lines, surface, fine, &amn);
   print(Row{"AFT fine, no repair", tn, amn.mesh.positions.size(), amn.mesh.triangles.size(),
             aft::evaluate_quality(amn, surface, 4)});
   std::printf(
@@ -652,26 +656,16 @@ int main(int argc, char** argv) {
   std::printf("%-36s %8s %9s %9s %8s %8s %7s %9s %9s\n", "method", "time_s", "vertices",
               "triangles", "min_ang", "%<30deg", "mean_q", "H_m->s", "H_s->m");
   // 1. AFT, sample head (best of 3 runs for the time).
-  double best = 1e300;
   aft::AnimationMesh am;
-  for (int run = 0; run < 3; ++run) {
-    const auto t0 = std::chrono::steady_clock::now();
-    am = aft::build_animation_mesh(g, lines, surface, settings);
-    best = std::min(best, seconds_since(t0));
-  }
+  const double best = build_best_of_3(g, lines, surface, settings, &am);
   const Row aft_row{"AFT (seed 000), sample head", best, am.mesh.positions.size(),
                     am.mesh.triangles.size(), aft::evaluate_quality(am, surface, 4)};
   print(aft_row);
   // The same with the repair lifting every triangle to 30 deg (region setting repair_goal_deg).
   aft::RegionSettings goal30 = settings;
   goal30.repair_goal_deg = 30.5;
-  double best30 = 1e300;
   aft::AnimationMesh am30;
-  for (int run = 0; run < 3; ++run) {
-    const auto t0 = std::chrono::steady_clock::now();
-    am30 = aft::build_animation_mesh(g, lines, surface, goal30);
-    best30 = std::min(best30, seconds_since(t0));
-  }
+  const double best30 = build_best_of_3(g, lines, surface, goal30, &am30);
   print(Row{"AFT, repair_goal_deg 30.5", best30, am30.mesh.positions.size(),
             am30.mesh.triangles.size(), aft::evaluate_quality(am30, surface, 4)});
   if (aft_only) {

@@ -31,6 +31,11 @@ inline double wrap_angle(double d) {
   return std::fabs(d) <= M_PI ? d : std::remainder(d, 2 * M_PI);
 }
 
+//! The midpoint of two (phi, h) parameters across the phi seam: phi next to a's.
+inline Eigen::Vector2d param_midpoint(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return {a.x() + 0.5 * wrap_angle(b.x() - a.x()), 0.5 * (a.y() + b.y())};
+}
+
 //! The angle at p of the triangle (p, q, r), in radians.
 inline double angle_at(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
                        const Eigen::Vector3d& r) {

@@ -658,8 +658,7 @@ class Mesher {
     f.t1 = (ab - ab.dot(f.n) * f.n).normalized();
     f.t2 = f.n.cross(f.t1);
     const double el = ab.norm();
-    Vector2d pm = 0.5 * (N_.params[a] + N_.params[b]);
-    pm.x() = N_.params[a].x() + 0.5 * wrap_angle(N_.params[b].x() - N_.params[a].x());
+    const Vector2d pm = param_midpoint(N_.params[a], N_.params[b]);
     const double u = std::clamp(size_at(pm), 0.62 * el, 1.6 * el);
     const double height = std::sqrt(std::max(u * u - 0.25 * el * el, 0.01 * el * el));
     const double radius = relaxed ? 6.0 * std::max(u, el) : 2.2 * std::max(u, el);

@@ -44,10 +44,7 @@ const double kValenceFlipFlatness = std::cos(20.0 * M_PI / 180);
 // below 30 deg instead of 2.4 %.)
 double chord_gap(const detail::NodeStore& store, const ScanSurface& surface, int x, int y) {
   const Vector3d mid = 0.5 * (store.pos[x] + store.pos[y]);
-  Vector2d start;
-  start.x() = store.params[x].x() + 0.5 * wrap_angle(store.params[y].x() - store.params[x].x());
-  start.y() = 0.5 * (store.params[x].y() + store.params[y].y());
-  const auto pr = surface.project(mid, start);
+  const auto pr = surface.project(mid, detail::param_midpoint(store.params[x], store.params[y]));
   return pr ? pr->distance : std::numeric_limits<double>::infinity();
 }
 
@@ -70,6 +67,16 @@ class FlipMesh {
   }
   const std::unordered_map<std::uint64_t, std::array<int, 2>>& edges() const { return adj_; }
   bool has_edge(int x, int y) const { return adj_.count(ukey(x, y)) > 0; }
+
+  // The quad of edge `key` if a flip may change it: not a constraint, and the diagonal r-s not
+  // already an edge elsewhere.
+  std::optional<Quad> flippable(std::uint64_t key,
+                                const std::unordered_set<std::uint64_t>& constraint) const {
+    if (constraint.count(key)) return std::nullopt;
+    const auto f = quad(key);
+    if (!f || has_edge(f->r, f->s)) return std::nullopt;
+    return f;
+  }
 
   // The quad of edge `key`; nullopt for a border edge, a gone edge or a degenerate quad.
   std::optional<Quad> quad(std::uint64_t key) const {
@@ -237,11 +244,9 @@ int valence_flips(std::vector<std::array<int, 3>>& T, const detail::NodeStore& s
     std::sort(keys.begin(), keys.end());
     int pass_flips = 0;
     for (const std::uint64_t key : keys) {
-      if (constraint.count(key)) continue;
-      const auto f = mesh.quad(key);
+      const auto f = mesh.flippable(key, constraint);
       if (!f) continue;
       const auto [a, b, r, s, t1, t2] = *f;
-      if (mesh.has_edge(r, s)) continue;
       if (dev(a, -1) + dev(b, -1) + dev(r, 1) + dev(s, 1) >=
           dev(a, 0) + dev(b, 0) + dev(r, 0) + dev(s, 0))
         continue;
