@@ -131,40 +131,12 @@ bool ScanSurface::defined(double phi, double h) const {
 
 namespace {
 
-// A change of slope between two neighbouring grid steps larger than this (mm) is a depth jump
-// (occlusion, silhouette), not skin: smooth parts sampled at 0.5-0.8 mm steps change their
-// slope by a fraction of a millimetre per step, and 8 mm is reached only where the surface
-// turns almost radial within one step. The same limit as the grid mesh's max_depth_jump_mm.
-constexpr double kJumpMm = 8.0;
-
-// Slope of a 1D sequence at the middle sample from its valid neighbours: the central
-// difference (Catmull-Rom). Next to a depth jump that would carry the jump into the
-// neighbouring patch, whose Hermite cubic then dips or bulges (2.4 mm beside the 31 mm step
-// at the simulated head's ear); there the Fritsch-Carlson monotone slope is taken instead:
-// 0 where the two one-sided differences disagree in sign, else the central slope clamped to
-// three times the smaller one, which keeps both neighbouring cubics monotone.
+// Slope of a 1D sequence at the middle sample from its valid neighbours.
 double slope(bool has_prev, double prev, double here, bool has_next, double next) {
-  if (has_prev && has_next) {
-    const double back = here - prev, ahead = next - here;
-    const double central = 0.5 * (next - prev);
-    if (std::fabs(ahead - back) <= kJumpMm) return central;
-    if ((back < 0) != (ahead < 0)) return 0.0;
-    const double limit = 3.0 * std::min(std::fabs(back), std::fabs(ahead));
-    return std::clamp(central, -limit, limit);
-  }
+  if (has_prev && has_next) return 0.5 * (next - prev);
   if (has_next) return next - here;
   if (has_prev) return here - prev;
   return 0.0;
-}
-
-// Where a depth jump runs through a node's 3 x 3 block its four quadrants' one-sided twists
-// (d2r/du dv) disagree by more than kJumpMm; the smallest in magnitude is then taken (the
-// slopes' rule, so no patch inherits the jump). Elsewhere: nullopt, the central difference.
-std::optional<double> twist_at_jump(const std::array<double, 4>& quadrant) {
-  const auto [lo, hi] = std::minmax_element(quadrant.begin(), quadrant.end());
-  if (*hi - *lo <= kJumpMm) return std::nullopt;
-  return *std::min_element(quadrant.begin(), quadrant.end(),
-                           [](double a, double b) { return std::fabs(a) < std::fabs(b); });
 }
 
 }  // namespace
@@ -176,15 +148,9 @@ ScanSurface::HermiteNode ScanSurface::hermite_node(int ni, int nj) const {
   HermiteNode d{r, slope(left, left ? r_at(ni - 1, nj) : 0, r, right, right ? r_at(ni + 1, nj) : 0),
                 slope(down, down ? r_at(ni, nj - 1) : 0, r, up, up ? r_at(ni, nj + 1) : 0), 0.0};
   if (cell_valid(ni - 1, nj - 1) && cell_valid(ni + 1, nj - 1) && cell_valid(ni - 1, nj + 1) &&
-      cell_valid(ni + 1, nj + 1)) {
-    auto q = [&](int di, int dj) {  // one-sided twist of the quadrant (di, dj)
-      return di * dj * (r_at(ni + di, nj + dj) - r_at(ni + di, nj) - r_at(ni, nj + dj) + r);
-    };
-    const auto at_jump = twist_at_jump({q(1, 1), q(1, -1), q(-1, 1), q(-1, -1)});
-    d.r_uv = at_jump ? *at_jump
-                     : 0.25 * (r_at(ni + 1, nj + 1) - r_at(ni + 1, nj - 1) - r_at(ni - 1, nj + 1) +
-                               r_at(ni - 1, nj - 1));
-  }
+      cell_valid(ni + 1, nj + 1))
+    d.r_uv = 0.25 * (r_at(ni + 1, nj + 1) - r_at(ni + 1, nj - 1) - r_at(ni - 1, nj + 1) +
+                     r_at(ni - 1, nj - 1));
   return d;
 }
 

@@ -77,47 +77,6 @@ TEST(ScanSurface, NeverInterpolatesAcrossAnInvalidCell) {
   EXPECT_FALSE(surface.defined(1.0, g.h(511) + 1.0));
 }
 
-// A cylinder of radius 64 with a 30 mm high step (an ear in front of the head: a depth jump
-// between two columns). Central differences would carry the step into the next patches,
-// which then dip below the cylinder (2.4 mm beside the simulated head's ear); the surface must
-// stay flat up to the step's own cell and monotone across it, and be the Catmull-Rom surface
-// away from it.
-TEST(ScanSurface, DepthJumpDoesNotRingIntoTheNeighbouringPatches) {
-  RangeGrid g(64, 16, 0.0, 0.0, 1.0);
-  const int step_column = 32;
-  for (int j = 0; j < 16; ++j)
-    for (int i = 0; i < 64; ++i) g.set_sample(i, j, i > step_column ? 94.0f : 64.0f);
-  const ScanSurface surface(g);
-  const double h = 7.5;
-  for (int i = 20; i < 44; ++i)
-    for (double s = 0.0; s < 1.0; s += 0.0625) {
-      const auto r = surface.radius_value((i + s) * g.dphi(), h);
-      ASSERT_TRUE(r.has_value());
-      if (i == step_column) {
-        // The wall's own patch: monotone between the two levels.
-        EXPECT_GE(*r, 64.0 - 1e-9);
-        EXPECT_LE(*r, 94.0 + 1e-9);
-      } else {
-        EXPECT_NEAR(*r, i < step_column ? 64.0 : 94.0, 1e-9) << "column " << i << " + " << s;
-      }
-    }
-  double previous = 0;
-  for (double s = 0.0; s <= 1.0; s += 0.0625) {
-    const double r = *surface.radius_value((step_column + s) * g.dphi(), h);
-    EXPECT_GE(r, previous - 1e-9);
-    previous = r;
-  }
-  // Away from any jump the slopes are still the central differences: a smooth ramp in phi is
-  // reproduced exactly between the nodes (Catmull-Rom reproduces quadratics).
-  RangeGrid ramp(64, 16, 0.0, 0.0, 1.0);
-  for (int j = 0; j < 16; ++j)
-    for (int i = 0; i < 64; ++i)
-      ramp.set_sample(i, j, static_cast<float>(60.0 + 0.01 * (i - 32) * (i - 32)));
-  const ScanSurface smooth(ramp);
-  for (double u = 20.25; u < 44.0; u += 0.5)
-    EXPECT_NEAR(*smooth.radius_value(u * ramp.dphi(), h), 60.0 + 0.01 * (u - 32) * (u - 32), 1e-5);
-}
-
 TEST(ScanSurface, CheapEvaluationsEqualTheFullJetBitForBitAndAreUndefinedWhereItIs) {
   // Holes and a rough grid, so one-sided slopes and missing twists are exercised too.
   auto scan = test::sphere_scan(0.05);

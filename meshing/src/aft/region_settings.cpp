@@ -73,6 +73,14 @@ RegionSettings parse_region_settings(std::string_view source, const std::string&
           s.segment_init = SegmentInit::Curvature;
         else
           throw FileFormatError(file, "segment_init must be equidistant or curvature");
+      } else if (key == "segment_spacing") {
+        const std::string m = text(v, file, key);
+        if (m == "finer")
+          s.segment_spacing = SegmentSpacing::Finer;
+        else if (m == "mean")
+          s.segment_spacing = SegmentSpacing::Mean;
+        else
+          throw FileFormatError(file, "segment_spacing must be finer or mean");
       } else if (key == "curvature_weight_mm") {
         s.curvature_weight_mm = positive(v, file, key);
       } else if (key == "chordal_tolerance_mm") {

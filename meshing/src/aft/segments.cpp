@@ -66,15 +66,20 @@ SegmentNodes initialise_segments(const RegionGraph& g, const LineSet& lines,
     const AnimationLine& line = lines.lines[seg.line];
     rails.push_back(make_rail(seg, surface, "line '" + line.id + "' (" + line.source + ")"));
     const Rail& rail = rails.back();
-    // d_I: the mean of the meshed neighbours' unit sizes; seams: the user's spacing.
-    double d = 0;
+    // d_I: the mean (or the finer) of the meshed neighbours' unit sizes; seams: the user's
+    // spacing (docs/animation-meshes.md, "Segment spacing").
+    double sum = 0, finer = 0;
     int n = 0;
     for (int r : {seg.left_region, seg.right_region})
       if (r >= 0 && !g.regions[r].opening) {
-        d += g.regions[r].unit_mm > 0 ? g.regions[r].unit_mm : settings.default_unit_mm;
+        const double unit =
+            g.regions[r].unit_mm > 0 ? g.regions[r].unit_mm : settings.default_unit_mm;
+        sum += unit;
+        finer = n ? std::min(finer, unit) : unit;
         ++n;
       }
-    d = n ? d / n : settings.default_unit_mm;
+    double d = !n ? settings.default_unit_mm
+                  : (settings.segment_spacing == SegmentSpacing::Finer ? finer : sum / n);
     if (line.kind == LineKind::Seam && line.node_spacing_mm > 0) d = line.node_spacing_mm;
     // The measure: arc length, or arc + weight * turning angle of the lifted curve.
     std::vector<double> measure = rail.arc;

@@ -127,6 +127,10 @@ regions:
   EXPECT_DOUBLE_EQ(parse_region_settings("repair_goal_deg: 30.5", "r.yaml").repair_goal_deg, 30.5);
   for (const char* bad : {"repair_goal_deg: 5", "repair_goal_deg: 60", "repair_goal_deg: x"})
     EXPECT_THROW(parse_region_settings(bad, "r.yaml"), FileFormatError) << bad;
+  EXPECT_EQ(s.segment_spacing, SegmentSpacing::Mean);
+  EXPECT_EQ(parse_region_settings("segment_spacing: finer", "r.yaml").segment_spacing,
+            SegmentSpacing::Finer);
+  EXPECT_THROW(parse_region_settings("segment_spacing: min", "r.yaml"), FileFormatError);
   EXPECT_EQ(s.strategy, EdgeStrategy::Random);
   ASSERT_EQ(s.regions.size(), 1u);
   EXPECT_DOUBLE_EQ(*s.regions[0].unit_mm, 2.5);

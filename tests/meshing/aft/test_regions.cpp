@@ -151,6 +151,38 @@ TEST(SegmentInit, EquidistantNodeCountAndSpacing) {
   }
 }
 
+// A square between a 5 mm region (inside) and a 15 mm ring (between it and an outer square):
+// its nodes are spaced by the mean of both by default, by the finer unit with
+// segment_spacing: finer. The outer square borders the ring alone: 15 mm either way.
+TEST(SegmentInit, SpacingBetweenTwoRegionsIsTheFinerUnitOrTheMean) {
+  const RangeGrid grid = test::cylinder_grid(100.0, 0.0);
+  const ScanSurface surface(grid);
+  const LineSet lines = parse_lines_svg(
+      "<svg><path d='M 100 150 L 200 150 L 200 250 L 100 250 Z'/>"
+      "<path d='M 50 100 L 250 100 L 250 300 L 50 300 Z'/></svg>",
+      "t.svg");
+  RegionGraph g = analyze_regions(lines, surface);
+  ASSERT_EQ(g.regions.size(), 2u);
+  ASSERT_EQ(g.segments.size(), 2u);
+  const int inner = g.regions[0].area < g.regions[1].area ? 0 : 1;
+  g.regions[inner].unit_mm = 5.0;
+  g.regions[1 - inner].unit_mm = 15.0;
+  const int square = g.segments[0].left_region >= 0 && g.segments[0].right_region >= 0 ? 0 : 1;
+  RegionSettings s;
+  s.relax_iterations = 0;
+  const SegmentNodes mean = initialise_segments(g, lines, surface, s);
+  s.segment_spacing = SegmentSpacing::Finer;
+  const SegmentNodes finer = initialise_segments(g, lines, surface, s);
+  // d_I' = s / (floor(s / d_I) + 1): just below d_I on a ~ 300 mm loop.
+  EXPECT_LE(finer.spacing_mm[square], 5.0);
+  EXPECT_GT(finer.spacing_mm[square], 4.9);
+  EXPECT_LE(mean.spacing_mm[square], 10.0);
+  EXPECT_GT(mean.spacing_mm[square], 9.6);
+  EXPECT_GT(finer.chains[square].size(), mean.chains[square].size() + 25);
+  EXPECT_NEAR(finer.spacing_mm[1 - square], mean.spacing_mm[1 - square], 1e-12);
+  EXPECT_GT(finer.spacing_mm[1 - square], 14.0);
+}
+
 TEST(SegmentInit, CurvatureModePutsMoreNodesWhereTheLineTurns) {
   const RangeGrid grid = test::cylinder_grid(100.0, 0.0);
   const ScanSurface surface(grid);

@@ -82,12 +82,16 @@ struct RegionRule {
 
 enum class EdgeStrategy { Random, Shortest, Longest };
 enum class SegmentInit { Equidistant, Curvature };
+//! d_I of a segment between two meshed regions: the mean of both regions' unit sizes, or the
+//! finer one (docs/animation-meshes.md, "Segment spacing").
+enum class SegmentSpacing { Finer, Mean };
 
 struct RegionSettings {
   double default_unit_mm = 6.0;
   std::string default_mesher = "aft";
   EdgeStrategy strategy = EdgeStrategy::Shortest;
   SegmentInit segment_init = SegmentInit::Equidistant;
+  SegmentSpacing segment_spacing = SegmentSpacing::Mean;
   double curvature_weight_mm = 10.0;  //!< curvature init: measure = arc + weight * turning
   double chordal_tolerance_mm = 0.5;  //!< curvature-adaptive size: sagitta bound
   double min_unit_mm = 0.3;           //!< lower bound of the adaptive size
