@@ -3,7 +3,9 @@
 
 #include <cmath>
 #include <fstream>
+#include <initializer_list>
 #include <sstream>
+#include <utility>
 
 #include "scanmesh/core/errors.h"
 #include "scanmesh/meshing/aft/regions.h"
@@ -35,6 +37,22 @@ std::string mesher_name(const YAML::Node& n, const std::string& file, const std:
   return m;
 }
 
+// A keyword setting: the value of the matching name, else an error listing the names
+// ("key must be a, b or c").
+template <typename Enum>
+Enum keyword(const YAML::Node& n, const std::string& file, const std::string& key,
+             std::initializer_list<std::pair<const char*, Enum>> choices) {
+  const std::string m = text(n, file, key);
+  const auto* c = choices.begin();
+  std::string names;
+  for (std::size_t k = 0; k < choices.size(); ++k) {
+    if (m == c[k].first) return c[k].second;
+    if (k > 0) names += k + 1 == choices.size() ? " or " : ", ";
+    names += c[k].first;
+  }
+  throw FileFormatError(file, key + " must be " + names);
+}
+
 }  // namespace
 
 RegionSettings parse_region_settings(std::string_view source, const std::string& file) {
@@ -56,31 +74,17 @@ RegionSettings parse_region_settings(std::string_view source, const std::string&
       } else if (key == "mesher") {
         s.default_mesher = mesher_name(v, file, key);
       } else if (key == "strategy") {
-        const std::string m = text(v, file, key);
-        if (m == "random")
-          s.strategy = EdgeStrategy::Random;
-        else if (m == "shortest")
-          s.strategy = EdgeStrategy::Shortest;
-        else if (m == "longest")
-          s.strategy = EdgeStrategy::Longest;
-        else
-          throw FileFormatError(file, "strategy must be random, shortest or longest");
+        s.strategy = keyword<EdgeStrategy>(v, file, key,
+                                           {{"random", EdgeStrategy::Random},
+                                            {"shortest", EdgeStrategy::Shortest},
+                                            {"longest", EdgeStrategy::Longest}});
       } else if (key == "segment_init") {
-        const std::string m = text(v, file, key);
-        if (m == "equidistant")
-          s.segment_init = SegmentInit::Equidistant;
-        else if (m == "curvature")
-          s.segment_init = SegmentInit::Curvature;
-        else
-          throw FileFormatError(file, "segment_init must be equidistant or curvature");
+        s.segment_init = keyword<SegmentInit>(
+            v, file, key,
+            {{"equidistant", SegmentInit::Equidistant}, {"curvature", SegmentInit::Curvature}});
       } else if (key == "segment_spacing") {
-        const std::string m = text(v, file, key);
-        if (m == "finer")
-          s.segment_spacing = SegmentSpacing::Finer;
-        else if (m == "mean")
-          s.segment_spacing = SegmentSpacing::Mean;
-        else
-          throw FileFormatError(file, "segment_spacing must be finer or mean");
+        s.segment_spacing = keyword<SegmentSpacing>(
+            v, file, key, {{"mean", SegmentSpacing::Mean}, {"finer", SegmentSpacing::Finer}});
       } else if (key == "curvature_weight_mm") {
         s.curvature_weight_mm = positive(v, file, key);
       } else if (key == "chordal_tolerance_mm") {

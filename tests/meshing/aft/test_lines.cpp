@@ -131,6 +131,14 @@ regions:
   EXPECT_EQ(parse_region_settings("segment_spacing: finer", "r.yaml").segment_spacing,
             SegmentSpacing::Finer);
   EXPECT_THROW(parse_region_settings("segment_spacing: min", "r.yaml"), FileFormatError);
+  try {
+    parse_region_settings("strategy: widest", "r.yaml");
+    ADD_FAILURE() << "strategy: widest was accepted";
+  } catch (const FileFormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("strategy must be random, shortest or longest"),
+              std::string::npos)
+        << e.what();
+  }
   EXPECT_EQ(s.strategy, EdgeStrategy::Random);
   ASSERT_EQ(s.regions.size(), 1u);
   EXPECT_DOUBLE_EQ(*s.regions[0].unit_mm, 2.5);
