@@ -190,6 +190,7 @@ int run_animesh(const AnimeshArgs& a) {
                              {"collapse", am.repair_operations[2] + am.repair_operations[3]},
                              {"split", am.repair_operations[4]},
                              {"left_below_20_deg", am.repair_left_below_20},
+                             {"left_above_deviation_goal", am.repair_left_above_deviation_goal},
                              {"forced_below_20_deg", am.repair_forced_below_20}};
   j["time_s"] = {{"load_and_regions", t_load},
                  {"mesh", t_mesh},

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <unordered_map>
 #include <unordered_set>
 #include <utility>
 #include <vector>
@@ -172,12 +173,29 @@ struct TwoWayDistance {
 };
 TwoWayDistance sampled_hausdorff(const AnimationMesh& am, const ScanSurface& surface, int samples);
 
+//! Distances from points to the same grid triangulation of the surface that sampled_hausdorff
+//! measures against: exact where ScanSurface::project (a local search) can stop in a far local
+//! minimum, e.g. at an ear's rim. The grid nodes it lifts are kept for later queries nearby
+//! (one object per thread).
+class GridSurfaceDistance {
+ public:
+  explicit GridSurfaceDistance(const ScanSurface& surface) : surface_(surface) {}
+  //! min(distance from x to the triangulation, radius), searching only within `radius`.
+  double operator()(const Eigen::Vector3d& x, double radius) const;
+
+ private:
+  const std::optional<Eigen::Vector3d>& node(int i, int j) const;
+  const ScanSurface& surface_;
+  mutable std::unordered_map<std::int64_t, std::optional<Eigen::Vector3d>> nodes_;
+};
+
 struct RepairStats {
   //! Accepted composite operations: 0 optimise, 1 flip, 2/3 collapse, 4 split (each followed by
   //! optimising the Steiner points it touched).
   std::array<int, 5> operations{};
   int left_below_goal = 0;    //!< triangles left below report_rad (a failure)
   int forced_below_goal = 0;  //!< below report_rad at a corner of two constraint edges (input)
+  int left_above_deviation_goal = 0;  //!< triangles still further from the surface than asked
 };
 
 //! The local small-angle repair after the front (quality_pass.cpp): triangles (with their
@@ -188,6 +206,6 @@ RepairStats repair_small_angles(std::vector<std::array<int, 3>>& triangles,
                                 const ScanSurface& surface,
                                 const std::unordered_set<std::uint64_t>& constraint,
                                 std::size_t boundary_nodes, double goal_rad, double report_rad,
-                                int rounds = 8);
+                                int rounds = 8, double deviation_goal_mm = 0);
 
 }  // namespace scanmesh::aft::detail

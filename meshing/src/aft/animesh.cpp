@@ -487,7 +487,7 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
                           detail::NodeStore& nodes) {
     return detail::repair_small_angles(tris, labels, nodes, surface, constraint, boundary_nodes,
                                        settings.repair_goal_deg * M_PI / 180, 20.0 * M_PI / 180,
-                                       settings.repair_rounds);
+                                       settings.repair_rounds, settings.deviation_goal_mm);
   };
   // Flips, tangential smoothing of the Steiner points (towards the neighbours' centroid, on the
   // surface, kept only if the smallest incident angle grows), flips again, and the small-angle
@@ -628,6 +628,7 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
     for (int k = 0; k < 5; ++k) am.repair_operations[k] += job.repair.operations[k];
     am.repair_left_below_20 += job.repair.left_below_goal;
     am.repair_forced_below_20 += job.repair.forced_below_goal;
+    am.repair_left_above_deviation_goal += job.repair.left_above_deviation_goal;
     am.thread_seconds.regions += job.thread_seconds.regions;
     am.thread_seconds.flips += job.thread_seconds.flips;
     am.thread_seconds.smoothing += job.thread_seconds.smoothing;
@@ -654,6 +655,7 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
       am.repair_operations = r.repair.operations;
       am.repair_left_below_20 = r.repair.left_below_goal;
       am.repair_forced_below_20 = r.repair.forced_below_goal;
+      am.repair_left_above_deviation_goal = r.repair.left_above_deviation_goal;
       am.serial_postprocessing = true;
       am.seconds.flips = r.seconds.flips;
       am.seconds.smoothing = r.seconds.smoothing;

@@ -14,13 +14,18 @@ namespace scanmesh::aft {
 
 namespace {
 
-double positive(const YAML::Node& n, const std::string& file, const std::string& key) {
+double number(const YAML::Node& n, const std::string& file, const std::string& key) {
   double v = 0;
   try {
     v = n.as<double>();
   } catch (const YAML::Exception&) {
     throw FileFormatError(file, key + " must be a number");
   }
+  return v;
+}
+
+double positive(const YAML::Node& n, const std::string& file, const std::string& key) {
+  const double v = number(n, file, key);
   if (!std::isfinite(v) || v <= 0) throw FileFormatError(file, key + " must be positive");
   return v;
 }
@@ -104,6 +109,11 @@ RegionSettings parse_region_settings(std::string_view source, const std::string&
         const double g = positive(v, file, key);
         if (g < 10 || g > 45) throw FileFormatError(file, "repair_goal_deg must be in 10..45");
         s.repair_goal_deg = g;
+      } else if (key == "deviation_goal_mm") {
+        const double d = number(v, file, key);
+        if (!std::isfinite(d) || d < 0)
+          throw FileFormatError(file, key + " must be a finite number >= 0 (0: off)");
+        s.deviation_goal_mm = d;
       } else if (key == "parallel_postprocessing" || key == "valence_flips") {
         if (!v.IsScalar() || (v.Scalar() != "true" && v.Scalar() != "false"))
           throw FileFormatError(file, key + " must be true or false");

@@ -16,6 +16,7 @@
 #include <optional>
 
 #include "aft_internal.h"
+#include "scanmesh/meshing/mesh_check.h"
 
 namespace scanmesh::aft::detail {
 
@@ -53,6 +54,50 @@ std::vector<Triangle> surface_triangles(const ScanSurface& s) {
 }
 
 }  // namespace
+
+const std::optional<Eigen::Vector3d>& GridSurfaceDistance::node(int i, int j) const {
+  const std::int64_t key = static_cast<std::int64_t>(j) * surface_.n_phi() + i;
+  auto it = nodes_.find(key);
+  if (it == nodes_.end())
+    it = nodes_
+             .emplace(key, surface_.position(surface_.phi0() + i * surface_.dphi(),
+                                             surface_.h0() + j * surface_.dh()))
+             .first;
+  return it->second;
+}
+
+double GridSurfaceDistance::operator()(const Eigen::Vector3d& x, double radius) const {
+  const ScanSurface& s = surface_;
+  const Eigen::Vector3d cyl = ScanSurface::to_cylindrical(x);  // phi, h, rho
+  const int n_phi = s.n_phi(), n_h = s.n_h();
+  // Every triangle of a cell lies in the cell's sector and height band (a chord of the sector
+  // stays in it), so the cells whose sector meets the ball's angular shadow asin(radius / rho)
+  // and whose band meets [h - radius, h + radius] hold every point within `radius`.
+  const double u = (cyl.x() - s.phi0()) / s.dphi();
+  int i_lo = 0, n_cols = n_phi;
+  if (radius < cyl.z()) {
+    const double half = std::asin(radius / cyl.z()) / s.dphi();
+    i_lo = static_cast<int>(std::floor(u - half));
+    n_cols = std::min(n_phi, static_cast<int>(std::floor(u + half)) - i_lo + 1);
+  }
+  const int j_lo = std::max(0, static_cast<int>(std::floor((cyl.y() - radius - s.h0()) / s.dh())));
+  const int j_hi =
+      std::min(n_h - 2, static_cast<int>(std::floor((cyl.y() + radius - s.h0()) / s.dh())));
+  double best = radius * radius;
+  for (int j = j_lo; j <= j_hi; ++j)
+    for (int c = 0; c < n_cols; ++c) {
+      const int i = (((i_lo + c) % n_phi) + n_phi) % n_phi, i1 = (i + 1) % n_phi;
+      // The cell's two triangles as surface_triangles makes them.
+      const auto& a = node(i, j);
+      const auto& cc = node(i1, j + 1);
+      if (!a || !cc) continue;
+      if (const auto& b = node(i1, j))
+        best = std::min(best, point_triangle_squared_distance(x, *a, *b, *cc));
+      if (const auto& d = node(i, j + 1))
+        best = std::min(best, point_triangle_squared_distance(x, *a, *cc, *d));
+    }
+  return std::sqrt(best);
+}
 
 TwoWayDistance sampled_hausdorff(const AnimationMesh& am, const ScanSurface& surface, int samples) {
   TwoWayDistance out;

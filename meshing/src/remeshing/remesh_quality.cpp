@@ -17,28 +17,6 @@ namespace {
 
 using Vec3 = Eigen::Vector3d;
 
-double point_triangle_sq(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
-  // Ericson 5.1.5.
-  const Vec3 ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) return ap.squaredNorm();
-  const Vec3 bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) return bp.squaredNorm();
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return (p - (a + d1 / (d1 - d3) * ab)).squaredNorm();
-  const Vec3 cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) return cp.squaredNorm();
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return (p - (a + d2 / (d2 - d6) * ac)).squaredNorm();
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
-    return (p - (b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b))).squaredNorm();
-  const double denom = 1.0 / (va + vb + vc);
-  return (p - (a + ab * (vb * denom) + ac * (vc * denom))).squaredNorm();
-}
-
 // Uniform grid of triangle boxes with shell-by-shell nearest search.
 class TriangleGrid {
  public:
@@ -94,8 +72,9 @@ class TriangleGrid {
             const std::size_t id = cell_id(x, y, z);
             for (std::size_t i = start_[id]; i < start_[id + 1]; ++i) {
               const auto& t = m_.triangles[faces_[i]];
-              best = std::min(best, point_triangle_sq(p, m_.positions[t[0]], m_.positions[t[1]],
-                                                      m_.positions[t[2]]));
+              best = std::min(
+                  best, point_triangle_squared_distance(p, m_.positions[t[0]], m_.positions[t[1]],
+                                                        m_.positions[t[2]]));
             }
           }
     }

@@ -127,6 +127,12 @@ regions:
   EXPECT_DOUBLE_EQ(parse_region_settings("repair_goal_deg: 30.5", "r.yaml").repair_goal_deg, 30.5);
   for (const char* bad : {"repair_goal_deg: 5", "repair_goal_deg: 60", "repair_goal_deg: x"})
     EXPECT_THROW(parse_region_settings(bad, "r.yaml"), FileFormatError) << bad;
+  EXPECT_DOUBLE_EQ(s.deviation_goal_mm, 0);  // off
+  EXPECT_DOUBLE_EQ(parse_region_settings("deviation_goal_mm: 1.5", "r.yaml").deviation_goal_mm,
+                   1.5);
+  for (const char* bad :
+       {"deviation_goal_mm: -1", "deviation_goal_mm: .inf", "deviation_goal_mm: x"})
+    EXPECT_THROW(parse_region_settings(bad, "r.yaml"), FileFormatError) << bad;
   EXPECT_EQ(s.segment_spacing, SegmentSpacing::Mean);
   EXPECT_EQ(parse_region_settings("segment_spacing: finer", "r.yaml").segment_spacing,
             SegmentSpacing::Finer);

@@ -58,6 +58,11 @@ bool triangles_intersect(const std::vector<Eigen::Vector3d>& P, const std::array
 double triangle_min_angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                           const Eigen::Vector3d& c);
 
+//! Squared distance from p to the closest point of the triangle (a, b, c) (Ericson, Real-Time
+//! Collision Detection, 5.1.5).
+double point_triangle_squared_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                                       const Eigen::Vector3d& b, const Eigen::Vector3d& c);
+
 //! q = 4 sqrt(3) A / (sum of squared edge lengths) of one triangle.
 double triangle_quality(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                         const Eigen::Vector3d& c);

@@ -60,6 +60,8 @@ struct AnimationMesh {
   //! other, split), triangles left below 20 deg, of which at a sharp input corner.
   std::array<int, 5> repair_operations{};
   int repair_left_below_20 = 0, repair_forced_below_20 = 0;
+  //! Triangles still further from the surface than RegionSettings::deviation_goal_mm (sampled).
+  int repair_left_above_deviation_goal = 0;
   //! True if the flips, smoothing and repair ran on the stitched mesh: because the settings ask
   //! for it, or because the regions' own ones made an edge with more than two triangles or a
   //! crossing between regions (the fallback).

@@ -105,6 +105,11 @@ struct RegionSettings {
   //! the 20 deg guarantee at the least cost; 30.5 also lifts the triangles between 20 and 30
   //! deg, ~3-4 times the post-processing time (docs/animation-meshes.md, "Repair goal").
   double repair_goal_deg = 20.5;
+  //! The repair also attacks every triangle further than this from the surface (mm, sampled;
+  //! 0: off), with the same operations, never lowering the smallest angle below the angle
+  //! goal (docs/animation-meshes.md, "Deviation goal"). Off by default: a distance in mm
+  //! depends on the scale of the object.
+  double deviation_goal_mm = 0;
   //! Flips, smoothing and repair per region in the parallel jobs (false: on the stitched mesh,
   //! serially, as the fallback does; docs/animation-meshes.md).
   bool parallel_postprocessing = true;
