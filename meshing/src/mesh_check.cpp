@@ -114,9 +114,15 @@ bool triangles_intersect(const std::vector<Vector3d>& P, const std::array<int, 3
 
 std::size_t count_intersecting_faces(const Mesh& mesh, const std::vector<int>* labels,
                                      const std::vector<char>* involved) {
+  return intersecting_face_pairs(mesh, labels, involved).size();
+}
+
+std::vector<std::array<int, 2>> intersecting_face_pairs(const Mesh& mesh,
+                                                        const std::vector<int>* labels,
+                                                        const std::vector<char>* involved) {
   const auto& P = mesh.positions;
   const auto& F = mesh.triangles;
-  if (F.size() < 2) return 0;
+  if (F.size() < 2) return {};
   std::vector<Vector3d> lo(F.size()), hi(F.size());
   Vector3d glo = P[F[0][0]], ghi = glo;
   double mean = 0;
@@ -153,8 +159,8 @@ std::size_t count_intersecting_faces(const Mesh& mesh, const std::vector<int>* l
       lists.push_back(&list);
       keys.push_back(key);
     }
-  std::size_t count = 0;
-#pragma omp parallel for schedule(dynamic, 64) reduction(+ : count)
+  std::vector<std::vector<std::array<int, 2>>> found(lists.size());
+#pragma omp parallel for schedule(dynamic, 64)
   for (std::size_t c = 0; c < lists.size(); ++c) {
     const auto& list = *lists[c];
     const long long key = keys[c];
@@ -167,10 +173,14 @@ std::size_t count_intersecting_faces(const Mesh& mesh, const std::vector<int>* l
         if ((l.array() > h.array()).any()) continue;
         // count the pair only in the cell holding the low corner of the box overlap
         if ((coord(l, 2) * dims[1] + coord(l, 1)) * dims[0] + coord(l, 0) != key) continue;
-        if (triangles_intersect(mesh.positions, F[f], F[g])) ++count;
+        if (triangles_intersect(mesh.positions, F[f], F[g]))
+          found[c].push_back({std::min(f, g), std::max(f, g)});
       }
   }
-  return count;
+  std::vector<std::array<int, 2>> pairs;
+  for (const auto& list : found) pairs.insert(pairs.end(), list.begin(), list.end());
+  std::sort(pairs.begin(), pairs.end());
+  return pairs;
 }
 
 double point_triangle_squared_distance(const Vector3d& p, const Vector3d& a, const Vector3d& b,

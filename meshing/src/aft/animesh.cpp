@@ -390,14 +390,32 @@ void smooth_steiner_points(const std::vector<std::array<int, 3>>& tris, detail::
 // with more than two triangles (a flip or collapse made an edge between two segment nodes that
 // another region has too).
 struct StitchDefects {
-  std::size_t crossings = 0, overfull_edges = 0;
+  std::size_t crossings = 0, overfull_edges = 0;  // crossings: pairs between two regions
+  std::vector<int> regions_crossing_themselves;   // regions with a crossing pair of their own
 };
 StitchDefects stitch_defects(const std::vector<std::array<int, 3>>& tris,
                              const std::vector<int>& labels, const std::vector<Vector3d>& pos) {
   Mesh mesh;
   mesh.positions = pos;
   mesh.triangles = tris;
-  return {count_intersecting_faces(mesh, &labels), topology_stats(mesh).nonmanifold_edges};
+  StitchDefects d;
+  d.overfull_edges = topology_stats(mesh).nonmanifold_edges;
+  for (const auto& [f, g] : intersecting_face_pairs(mesh)) {
+    if (labels[f] != labels[g]) ++d.crossings;
+    else d.regions_crossing_themselves.push_back(labels[f]);
+  }
+  auto& own = d.regions_crossing_themselves;
+  std::sort(own.begin(), own.end());
+  own.erase(std::unique(own.begin(), own.end()), own.end());
+  return d;
+}
+
+std::size_t crossings_within(const std::vector<std::array<int, 3>>& tris,
+                             const std::vector<Vector3d>& pos) {
+  Mesh mesh;
+  mesh.positions = pos;
+  mesh.triangles = tris;
+  return count_intersecting_faces(mesh);
 }
 
 }  // namespace
@@ -568,29 +586,33 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
     job.thread_seconds.smoothing = r.seconds.smoothing;
     job.thread_seconds.repair = r.seconds.repair;
   };
+  // One region meshed (and post-processed, unless that runs on the stitched mesh) from scratch.
+  const auto mesh_region = [&](RegionJob& job) {
+    const auto job_start = Clock::now();
+    job.nodes = store;
+    job.stats = RegionMeshStats{};
+    job.stats.region = job.region;
+    std::optional<std::vector<std::array<int, 3>>> region_tris;
+    if (g.regions[job.region].mesher == "delaunay") {
+      region_tris = detail::delaunay_mesh_region(job.nodes, surface, job.in, job.stats);
+      if (region_tris) job.stats.mesher = "delaunay";
+    }
+    if (!region_tris) region_tris = detail::aft_mesh_region(job.nodes, surface, job.in, job.stats);
+    job.tris = std::move(*region_tris);
+    job.thread_seconds.regions += seconds_since(job_start);
+    if (settings.parallel_postprocessing) {
+      postprocess_region(job);
+    } else {
+      job.nodes_meshed = job.nodes;
+      job.tris_meshed = job.tris;
+    }
+  };
   std::vector<std::exception_ptr> errors(jobs.size());
 #pragma omp parallel for schedule(dynamic, 1)
   for (std::size_t k = 0; k < order.size(); ++k) {
     RegionJob& job = jobs[order[k]];
-    const auto job_start = Clock::now();
     try {
-      job.nodes = store;
-      job.stats.region = job.region;
-      std::optional<std::vector<std::array<int, 3>>> region_tris;
-      if (g.regions[job.region].mesher == "delaunay") {
-        region_tris = detail::delaunay_mesh_region(job.nodes, surface, job.in, job.stats);
-        if (region_tris) job.stats.mesher = "delaunay";
-      }
-      if (!region_tris)
-        region_tris = detail::aft_mesh_region(job.nodes, surface, job.in, job.stats);
-      job.tris = std::move(*region_tris);
-      job.thread_seconds.regions = seconds_since(job_start);
-      if (settings.parallel_postprocessing) {
-        postprocess_region(job);
-      } else {
-        job.nodes_meshed = job.nodes;
-        job.tris_meshed = job.tris;
-      }
+      mesh_region(job);
     } catch (...) {
       errors[order[k]] = std::current_exception();
     }
@@ -621,6 +643,48 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
   std::vector<std::array<int, 3>> tris;
   std::vector<int> labels;
   stitch(false, stitched, tris, labels);
+  am.seconds.regions = seconds_since(stage_start);
+  stage_start = Clock::now();
+  // Crossing triangles inside one region: the front's visibility tests run in (phi, h), and at
+  // a depth-jump wall (an ear's rim) the flat 3D triangles' footprints can overlap where their
+  // parameter triangles do not (3 pairs at a quarter of the sample units with segment_spacing:
+  // finer; none at the defaults). Such a region is meshed again with the other front orders
+  // (GET-NEXT-EDGE), which build a different mesh there, and the first without crossings is
+  // kept (else the one with the fewest).
+  StitchDefects defects = stitch_defects(tris, labels, stitched.pos);
+  if (!defects.regions_crossing_themselves.empty()) {
+    for (RegionJob& job : jobs) {
+      if (!std::binary_search(defects.regions_crossing_themselves.begin(),
+                              defects.regions_crossing_themselves.end(), job.region))
+        continue;
+      am.regions_remeshed_for_crossings.push_back(job.region);
+      RegionJob best = job;
+      std::size_t best_crossings = crossings_within(job.tris, job.nodes.pos);
+      std::vector<std::pair<EdgeStrategy, std::uint64_t>> orders;
+      for (const EdgeStrategy s :
+           {EdgeStrategy::Shortest, EdgeStrategy::Longest, EdgeStrategy::Random})
+        if (s != job.in.strategy) orders.push_back({s, job.in.seed});
+      orders.push_back({EdgeStrategy::Random, job.in.seed + 1});
+      orders.push_back({EdgeStrategy::Random, job.in.seed + 2});
+      for (const auto& [strategy, seed] : orders) {
+        if (best_crossings == 0) break;
+        job.in.strategy = strategy;
+        job.in.seed = seed;
+        mesh_region(job);
+        const std::size_t c = crossings_within(job.tris, job.nodes.pos);
+        if (c < best_crossings) {
+          best = job;
+          best_crossings = c;
+        }
+      }
+      job = std::move(best);
+    }
+    stitched = {};
+    tris.clear();
+    labels.clear();
+    stitch(false, stitched, tris, labels);
+    defects = stitch_defects(tris, labels, stitched.pos);
+  }
   for (const RegionJob& job : jobs) {
     am.region_stats.push_back(job.stats);
     am.flips += job.flips;
@@ -634,14 +698,11 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
     am.thread_seconds.smoothing += job.thread_seconds.smoothing;
     am.thread_seconds.repair += job.thread_seconds.repair;
   }
-  am.seconds.regions = seconds_since(stage_start);
-  stage_start = Clock::now();
   // The regions did not see each other (above). If the stitched mesh has an edge with more
   // than two triangles, or more crossings between regions than the meshers left, the flips,
   // smoothing and repair are done again on the stitched mesh as the meshers left it, where every
   // edge and every changed triangle is tested against the whole mesh. (Neither has happened on
   // the sample head at any unit size tried.)
-  const StitchDefects defects = stitch_defects(tris, labels, stitched.pos);
   if (!settings.parallel_postprocessing || defects.crossings > 0 || defects.overfull_edges > 0) {
     detail::NodeStore meshed;
     std::vector<std::array<int, 3>> tris_meshed;

@@ -283,5 +283,32 @@ TEST(AnimationMeshHead, DeviationGoalBringsTheMeshCloserToTheSurface) {
   EXPECT_GE(q_on.fraction_min_angle_ge_30, 0.95) << q_on.to_text();
 }
 
+// A region whose own triangles cross is meshed again with another front order. With
+// segment_spacing: finer at a quarter of the sample units the shortest-edge front built 3
+// crossing pairs on the right ear's depth-jump wall (2 Dec 2026); the remedy must leave none.
+TEST(AnimationMeshHead, RegionWhoseTrianglesCrossIsMeshedAgain) {
+  const test::SampleHead head;
+  RegionGraph g = analyze_regions(head.lines, head.surface);
+  RegionSettings s = head.settings.with_units_scaled(0.25);
+  s.segment_spacing = SegmentSpacing::Finer;
+  apply_region_settings(g, s, head.surface);
+  const AnimationMesh am = build_animation_mesh(g, head.lines, head.surface, s);
+  // If the mesher stops making crossings here, this test needs another case to exercise the
+  // remedy (the assertion below says so rather than passing silently).
+  ASSERT_FALSE(am.regions_remeshed_for_crossings.empty());
+  for (int r : am.regions_remeshed_for_crossings) {
+    ASSERT_GE(r, 0);
+    ASSERT_LT(r, static_cast<int>(g.regions.size()));
+    EXPECT_FALSE(g.regions[r].opening);
+  }
+  const MeshCheckReport rep = check_mesh(am.mesh);
+  EXPECT_EQ(rep.self_intersections, 0u) << rep.to_text();
+  EXPECT_TRUE(rep.edge_manifold()) << rep.to_text();
+  int open_edges = 0;
+  for (const auto& st : am.region_stats) open_edges += st.unmeshed_front_edges;
+  EXPECT_EQ(open_edges, 0);
+  EXPECT_LT(evaluate_quality(am, head.surface, 2).max_vertex_offset_mm, 0.01);
+}
+
 }  // namespace
 }  // namespace scanmesh::aft

@@ -48,6 +48,10 @@ MeshCheckReport check_mesh(const Mesh& mesh, const MeshCheckOptions& options = {
 //! `involved` (one flag per face) only the pairs with at least one flagged face.
 std::size_t count_intersecting_faces(const Mesh& mesh, const std::vector<int>* labels = nullptr,
                                      const std::vector<char>* involved = nullptr);
+//! The same pairs themselves (f < g, sorted).
+std::vector<std::array<int, 2>> intersecting_face_pairs(const Mesh& mesh,
+                                                        const std::vector<int>* labels = nullptr,
+                                                        const std::vector<char>* involved = nullptr);
 
 //! Faces f and g (indices into P) intersect improperly: more than touching at shared corners or
 //! along a shared edge (the self-intersection predicate of check_mesh; double precision).

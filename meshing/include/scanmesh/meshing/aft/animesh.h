@@ -62,13 +62,16 @@ struct AnimationMesh {
   int repair_left_below_20 = 0, repair_forced_below_20 = 0;
   //! Triangles still further from the surface than RegionSettings::deviation_goal_mm (sampled).
   int repair_left_above_deviation_goal = 0;
+  //! Regions meshed again with another front order because their own triangles crossed.
+  std::vector<int> regions_remeshed_for_crossings;
   //! True if the flips, smoothing and repair ran on the stitched mesh: because the settings ask
   //! for it, or because the regions' own ones made an edge with more than two triangles or a
   //! crossing between regions (the fallback).
   bool serial_postprocessing = false;
   //! Seconds, for reports and benchmarks (not part of the result). `seconds`: wall clock of
   //! the segment nodes, of the regions (meshed, flipped, smoothed and repaired in parallel),
-  //! of the check for crossings between regions (including a serial post-processing), and of
+  //! of the check for crossings (including re-meshing regions whose own triangles crossed and
+  //! a serial post-processing), and of
   //! the serial flips, smoothing and repair if they ran. `thread_seconds`: the regions' stages
   //! summed over the threads (regions = the meshers).
   struct StageSeconds {
