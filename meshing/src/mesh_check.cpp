@@ -76,22 +76,27 @@ bool triangles_intersect(const std::vector<Vector3d>& P, const std::array<int, 3
   std::array<Vector3d, 3> a{P[f[0]], P[f[1]], P[f[2]]}, b{P[g[0]], P[g[1]], P[g[2]]};
   int shared = 0;
   std::array<int, 3> fi{-1, -1, -1};  // fi[k]: index in g of f[k], or -1
+  std::array<bool, 3> g_shared{false, false, false};
   for (int k = 0; k < 3; ++k)
     for (int j = 0; j < 3; ++j)
       if (f[k] == g[j]) {
         fi[k] = j;
+        g_shared[j] = true;
         ++shared;
       }
   if (shared == 3) return false;  // duplicate, counted separately
   const Vector3d na = (a[1] - a[0]).cross(a[2] - a[0]);
   const Vector3d nb = (b[1] - b[0]).cross(b[2] - b[0]);
-  double scale = 0;
+  double scale2 = 0;
   for (int k = 0; k < 3; ++k)
-    scale = std::max({scale, (a[k] - a[(k + 1) % 3]).norm(), (b[k] - b[(k + 1) % 3]).norm()});
-  const double tol = 1e-12 * scale * scale * scale;
+    scale2 = std::max(
+        {scale2, (a[k] - a[(k + 1) % 3]).squaredNorm(), (b[k] - b[(k + 1) % 3]).squaredNorm()});
+  const double tol = 1e-12 * scale2 * std::sqrt(scale2);
+  // A shared corner lies in f's plane by definition; only g's other corners are tested (the
+  // stitched mesh's check meets every pair of neighbouring triangles, most sharing an edge).
   bool coplanar = true;
-  for (int k = 0; k < 3; ++k)
-    if (std::abs(orient3d(a[0], a[1], a[2], b[k])) > tol) coplanar = false;
+  for (int k = 0; k < 3 && coplanar; ++k)
+    if (!g_shared[k] && std::abs(orient3d(a[0], a[1], a[2], b[k])) > tol) coplanar = false;
   if (coplanar) return coplanar_overlap(a, b, na.squaredNorm() > 0 ? na : nb);
   if (shared == 2) return false;  // non-coplanar faces on a common edge meet only on it
   if (shared == 1) {
