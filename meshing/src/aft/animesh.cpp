@@ -401,8 +401,10 @@ StitchDefects stitch_defects(const std::vector<std::array<int, 3>>& tris,
   StitchDefects d;
   d.overfull_edges = topology_stats(mesh).nonmanifold_edges;
   for (const auto& [f, g] : intersecting_face_pairs(mesh)) {
-    if (labels[f] != labels[g]) ++d.crossings;
-    else d.regions_crossing_themselves.push_back(labels[f]);
+    if (labels[f] != labels[g])
+      ++d.crossings;
+    else
+      d.regions_crossing_themselves.push_back(labels[f]);
   }
   auto& own = d.regions_crossing_themselves;
   std::sort(own.begin(), own.end());
@@ -657,9 +659,17 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
       if (!std::binary_search(defects.regions_crossing_themselves.begin(),
                               defects.regions_crossing_themselves.end(), job.region))
         continue;
+      // The surface Delaunay mesher has no front order to change.
+      if (job.stats.mesher == "delaunay") continue;
       am.regions_remeshed_for_crossings.push_back(job.region);
+      // An attempt is better with fewer unclosed front edges (a hole is worse than a crossing),
+      // then fewer crossings.
+      const auto badness = [&](const RegionJob& j) {
+        return std::pair{j.stats.unmeshed_front_edges, crossings_within(j.tris, j.nodes.pos)};
+      };
       RegionJob best = job;
-      std::size_t best_crossings = crossings_within(job.tris, job.nodes.pos);
+      auto best_badness = badness(job);
+      AnimationMesh::StageSeconds spent = job.thread_seconds;
       std::vector<std::pair<EdgeStrategy, std::uint64_t>> orders;
       for (const EdgeStrategy s :
            {EdgeStrategy::Shortest, EdgeStrategy::Longest, EdgeStrategy::Random})
@@ -667,17 +677,22 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
       orders.push_back({EdgeStrategy::Random, job.in.seed + 1});
       orders.push_back({EdgeStrategy::Random, job.in.seed + 2});
       for (const auto& [strategy, seed] : orders) {
-        if (best_crossings == 0) break;
+        if (best_badness == std::pair{0, std::size_t{0}}) break;
         job.in.strategy = strategy;
         job.in.seed = seed;
+        job.thread_seconds = {};
         mesh_region(job);
-        const std::size_t c = crossings_within(job.tris, job.nodes.pos);
-        if (c < best_crossings) {
+        spent.regions += job.thread_seconds.regions;
+        spent.flips += job.thread_seconds.flips;
+        spent.smoothing += job.thread_seconds.smoothing;
+        spent.repair += job.thread_seconds.repair;
+        if (const auto b = badness(job); b < best_badness) {
           best = job;
-          best_crossings = c;
+          best_badness = b;
         }
       }
       job = std::move(best);
+      job.thread_seconds = spent;  // every attempt's time
     }
     stitched = {};
     tris.clear();

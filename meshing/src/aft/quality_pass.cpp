@@ -628,17 +628,19 @@ class Repair {
     }
     std::sort(sc.s.begin(), sc.s.end());
     if (!scoring_deviation_) return sc;
-    if (bar && (sc.folded > bar->folded ||
-                (!sc.s.empty() && !bar->s.empty() && sc.s[0] < bar->s[0] - 1e-7))) {
+    // (In better()'s order: more folds, or as many and a smaller smallest angle.)
+    if (bar && (sc.folded > bar->folded || (sc.folded == bar->folded && !sc.s.empty() &&
+                                            !bar->s.empty() && sc.s[0] < bar->s[0] - 1e-7))) {
       sc.excess = std::numeric_limits<double>::infinity();
       return sc;
     }
     for (int t : ts) sc.excess = std::max(sc.excess, excess(t));
     return sc;
   }
-  // Fewer folds; then the smallest angle (capped at the goal); then less excess deviation;
-  // then the rest of the angle list. So a deviation repair never lowers the worst angle below
-  // the goal, and an angle repair prefers, of equal angles, the candidate nearer the surface.
+  // Fewer folds; then the smallest angle (capped); then less excess deviation (scored only in
+  // the repair of a triangle off the surface, else 0); then the rest of the angle list. So a
+  // deviation repair never lowers the neighbourhood's smallest angle below min(its value,
+  // the cap) unless it removes a fold.
   static bool better(const Score& a, const Score& b) {
     if (a.folded != b.folded) return a.folded < b.folded;
     if (!a.s.empty() && !b.s.empty()) {
