@@ -30,25 +30,41 @@ using Tree = CGAL::AABB_tree<CGAL::AABB_traits<Kernel, Primitive>>;
 
 Point point(const Eigen::Vector3d& p) { return {p.x(), p.y(), p.z()}; }
 
-// The surface triangulated at its grid nodes: two triangles per cell whose four nodes are on
-// the surface (wrapping in phi).
+// The grid triangulation of the surface, the reference of both the quality report and the
+// repair's deviation goal (GridSurfaceDistance), so both come from these two functions:
+// grid node (i, j) lifted onto the surface, and the two triangles of the cell with corners
+// a = (i, j), b = (i + 1, j), c = (i + 1, j + 1), d = (i, j + 1) (i wrapping in phi), each
+// present where its three nodes are on the surface.
+std::optional<Eigen::Vector3d> grid_node(const ScanSurface& s, int i, int j) {
+  return s.position(s.phi0() + i * s.dphi(), s.h0() + j * s.dh());
+}
+template <class Emit>
+void cell_triangles(const std::optional<Eigen::Vector3d>& a,
+                    const std::optional<Eigen::Vector3d>& b,
+                    const std::optional<Eigen::Vector3d>& c,
+                    const std::optional<Eigen::Vector3d>& d, Emit&& emit) {
+  if (!a || !c) return;
+  if (b) emit(*a, *b, *c);
+  if (d) emit(*a, *c, *d);
+}
+
 std::vector<Triangle> surface_triangles(const ScanSurface& s) {
   const int n_phi = s.n_phi(), n_h = s.n_h();
   std::vector<std::optional<Eigen::Vector3d>> node(static_cast<std::size_t>(n_phi) * n_h);
   for (int j = 0; j < n_h; ++j)
     for (int i = 0; i < n_phi; ++i)
-      node[static_cast<std::size_t>(j) * n_phi + i] =
-          s.position(s.phi0() + i * s.dphi(), s.h0() + j * s.dh());
+      node[static_cast<std::size_t>(j) * n_phi + i] = grid_node(s, i, j);
   std::vector<Triangle> out;
   for (int j = 0; j + 1 < n_h; ++j)
     for (int i = 0; i < n_phi; ++i) {
       const int i1 = (i + 1) % n_phi;
-      const auto& a = node[static_cast<std::size_t>(j) * n_phi + i];
-      const auto& b = node[static_cast<std::size_t>(j) * n_phi + i1];
-      const auto& c = node[static_cast<std::size_t>(j + 1) * n_phi + i1];
-      const auto& d = node[static_cast<std::size_t>(j + 1) * n_phi + i];
-      if (a && b && c) out.emplace_back(point(*a), point(*b), point(*c));
-      if (a && c && d) out.emplace_back(point(*a), point(*c), point(*d));
+      cell_triangles(node[static_cast<std::size_t>(j) * n_phi + i],
+                     node[static_cast<std::size_t>(j) * n_phi + i1],
+                     node[static_cast<std::size_t>(j + 1) * n_phi + i1],
+                     node[static_cast<std::size_t>(j + 1) * n_phi + i],
+                     [&](const auto& a, const auto& b, const auto& c) {
+                       out.emplace_back(point(a), point(b), point(c));
+                     });
     }
   return out;
 }
@@ -58,11 +74,7 @@ std::vector<Triangle> surface_triangles(const ScanSurface& s) {
 const std::optional<Eigen::Vector3d>& GridSurfaceDistance::node(int i, int j) const {
   const std::int64_t key = static_cast<std::int64_t>(j) * surface_.n_phi() + i;
   auto it = nodes_.find(key);
-  if (it == nodes_.end())
-    it = nodes_
-             .emplace(key, surface_.position(surface_.phi0() + i * surface_.dphi(),
-                                             surface_.h0() + j * surface_.dh()))
-             .first;
+  if (it == nodes_.end()) it = nodes_.emplace(key, grid_node(surface_, i, j)).first;
   return it->second;
 }
 
@@ -87,14 +99,10 @@ double GridSurfaceDistance::operator()(const Eigen::Vector3d& x, double radius) 
   for (int j = j_lo; j <= j_hi; ++j)
     for (int c = 0; c < n_cols; ++c) {
       const int i = (((i_lo + c) % n_phi) + n_phi) % n_phi, i1 = (i + 1) % n_phi;
-      // The cell's two triangles as surface_triangles makes them.
-      const auto& a = node(i, j);
-      const auto& cc = node(i1, j + 1);
-      if (!a || !cc) continue;
-      if (const auto& b = node(i1, j))
-        best = std::min(best, point_triangle_squared_distance(x, *a, *b, *cc));
-      if (const auto& d = node(i, j + 1))
-        best = std::min(best, point_triangle_squared_distance(x, *a, *cc, *d));
+      cell_triangles(node(i, j), node(i1, j), node(i1, j + 1), node(i, j + 1),
+                     [&](const auto& a, const auto& b, const auto& cc) {
+                       best = std::min(best, point_triangle_squared_distance(x, a, b, cc));
+                     });
     }
   return std::sqrt(best);
 }
