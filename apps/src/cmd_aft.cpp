@@ -185,7 +185,7 @@ int run_animesh(const AnimeshArgs& a) {
   j["steiner_points"] = steiner;
   j["flips"] = am.flips;
   j["valence_flip_retries"] = am.valence_flip_retries;
-  j["regions_remeshed_for_crossings"] = am.regions_remeshed_for_crossings;
+  j["regions_remeshed"] = am.regions_remeshed;
   j["small_angle_repair"] = {{"optimise", am.repair_operations[0]},
                              {"flip", am.repair_operations[1]},
                              {"collapse", am.repair_operations[2] + am.repair_operations[3]},

@@ -128,6 +128,34 @@ class CellLists {
   std::size_t used_ = 0;  // lists_[0, used_) are in use
 };
 
+//! Triangles filed under the cells of a uniform 3D grid that their bounding boxes overlap, for
+//! local 3D crossing tests while a mesh changes (the post-processing's moves and flips). Entries
+//! are only ever added: a triangle that moved or was replaced is filed again where it lies now,
+//! and a query tests the triangles as they are now, so stale entries cost time, never answers.
+class TriangleCells {
+ public:
+  explicit TriangleCells(double cell) : cell_(cell) {}
+  //! Files triangle t (its corners f) under every cell its box overlaps.
+  void insert(int t, const std::array<int, 3>& f, std::span<const Eigen::Vector3d> P);
+  //! True if the triangle f intersects a live triangle of T (f[0] >= 0) filed near it, more than
+  //! at shared corners or along a shared edge; T's triangles `self` and `also_self` (f's own
+  //! index, the one it replaces, or -1) are not tested.
+  bool crosses_any(const std::array<int, 3>& f, int self, std::span<const std::array<int, 3>> T,
+                   const std::vector<Eigen::Vector3d>& P, int also_self = -1);
+
+ private:
+  Eigen::AlignedBox<std::int64_t, 3> cells_of(const std::array<int, 3>& f,
+                                              std::span<const Eigen::Vector3d> P) const;
+  static std::int64_t key(std::int64_t x, std::int64_t y, std::int64_t z) {
+    return ((x & 0x1fffff) << 42) | ((y & 0x1fffff) << 21) | (z & 0x1fffff);
+  }
+  double cell_;
+  CellLists lists_;
+  std::vector<Eigen::AlignedBox<std::int64_t, 3>> filed_;  // per triangle: its last filing's cells
+  std::vector<std::uint32_t> stamp_;  // crosses_any: the last query that met a triangle
+  std::uint32_t epoch_ = 0;
+};
+
 //! Every node of the animation mesh: (phi, h) and its point and normal on the surface.
 struct NodeStore {
   std::vector<Eigen::Vector2d> params;

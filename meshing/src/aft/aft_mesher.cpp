@@ -215,7 +215,14 @@ class Mesher {
     std::vector<int> deferred;
     bool relaxed = false;
     std::size_t guard = 0;
-    const std::size_t guard_max = in_.max_steps > 0 ? in_.max_steps : 20000 + 40 * in_.front.size();
+    // A bound on the steps only against a front that never closes. It must grow with the
+    // region's triangles, i.e. with the square of its boundary's node count at a fixed spacing
+    // (20000 + 40 n, linear, cut the ears' regions off at 0.125 of the sample units with ~30,000
+    // triangles made and 127 and 208 front edges left open). 10 n^2 leaves room for a region
+    // some times larger than the disc its boundary encloses (an ear) and a curvature-adaptive
+    // unit below the boundary spacing.
+    const std::size_t n = in_.front.size();
+    const std::size_t guard_max = in_.max_steps > 0 ? in_.max_steps : 20000 + 40 * n + 10 * n * n;
     while (true) {
       if (++guard >= guard_max) {
         stats_.unmeshed_front_edges = static_cast<int>(index_.size());

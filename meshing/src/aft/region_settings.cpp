@@ -103,6 +103,10 @@ RegionSettings parse_region_settings(std::string_view source, const std::string&
         (key == "relax_iterations"    ? s.relax_iterations
          : key == "smooth_iterations" ? s.smooth_iterations
                                       : s.repair_rounds) = n;
+      } else if (key == "max_front_steps") {
+        const long n = v.as<long>();
+        if (n < 0) throw FileFormatError(file, "max_front_steps must be >= 0 (0: automatic)");
+        s.max_front_steps = n;
       } else if (key == "repair_goal_deg") {
         // Above ~45 deg the goal is out of reach almost everywhere and the repair would only
         // burn time; below 10 it would leave the slivers it exists for.

@@ -62,8 +62,9 @@ struct AnimationMesh {
   int repair_left_below_20 = 0, repair_forced_below_20 = 0;
   //! Triangles still further from the surface than RegionSettings::deviation_goal_mm (sampled).
   int repair_left_above_deviation_goal = 0;
-  //! Regions meshed again with another front order because their own triangles crossed.
-  std::vector<int> regions_remeshed_for_crossings;
+  //! Regions meshed again with another front order because their own triangles crossed or
+  //! their front did not close.
+  std::vector<int> regions_remeshed;
   //! True if the flips, smoothing and repair ran on the stitched mesh: because the settings ask
   //! for it, or because the regions' own ones made an edge with more than two triangles or a
   //! crossing between regions (the fallback).

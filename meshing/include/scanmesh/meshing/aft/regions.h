@@ -101,6 +101,10 @@ struct RegionSettings {
   //! (docs/animation-meshes.md, "Valence flips"); false: max-min-angle flips only.
   bool valence_flips = true;
   int repair_rounds = 8;  //!< small-angle repair sweeps (0: off)
+  //! The advancing front's step budget per region (a bound on its time; 0: automatic, enough
+  //! for any front that closes). A region over budget is meshed again with the other front
+  //! orders and, if none closes, left with a hole that the report names.
+  long max_front_steps = 0;
   //! The repair attacks every triangle whose smallest angle is below this (deg): 20.5 keeps
   //! the 20 deg guarantee at the least cost; 30.5 also lifts the triangles between 20 and 30
   //! deg, ~3-4 times the post-processing time (docs/animation-meshes.md, "Repair goal").
