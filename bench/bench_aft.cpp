@@ -88,19 +88,29 @@ void bench_fine(const aft::LineSet& lines, const ScanSurface& surface,
       100 * std::max(0.0, tf - tn) / tf);
 }
 
-// --fine-runs N: only the fine meshing, N times, one line of triangles and seconds per run and
-// nothing else in the process (for perf: the quality evaluation would dominate a profile).
+// --fine-runs N [SCALE]: only the fine meshing (all units x SCALE, default 0.25), N times, one
+// line of triangles, seconds and stages per run and nothing else in the process (for perf: the
+// quality evaluation would dominate a profile). Regions meshed again or left open are named,
+// since below a quarter of the units that is where the time goes.
 void time_fine_runs(const aft::LineSet& lines, const ScanSurface& surface,
-                    const aft::RegionSettings& settings, int runs) {
-  const aft::RegionSettings fine = settings.with_units_scaled(0.25);
+                    const aft::RegionSettings& settings, int runs, double scale) {
+  const aft::RegionSettings fine = settings.with_units_scaled(scale);
   aft::RegionGraph gf = aft::analyze_regions(lines, surface);
   aft::apply_region_settings(gf, fine, surface);
   for (int run = 0; run < runs; ++run) {
     const auto t0 = std::chrono::steady_clock::now();
     const aft::AnimationMesh m = aft::build_animation_mesh(gf, lines, surface, fine);
     const double t = seconds_since(t0);
-    std::printf("%zu triangles in %.3f s = %.0f triangles/s\n", m.mesh.triangles.size(), t,
-                m.mesh.triangles.size() / t);
+    std::printf(
+        "%zu triangles in %.3f s = %.0f triangles/s (wall s: segments %.3f, regions %.3f, "
+        "check %.3f; thread s: mesher %.3f, flips %.3f, smoothing %.3f, repair %.3f)\n",
+        m.mesh.triangles.size(), t, m.mesh.triangles.size() / t, m.seconds.segments,
+        m.seconds.regions, m.seconds.check, m.thread_seconds.regions, m.thread_seconds.flips,
+        m.thread_seconds.smoothing, m.thread_seconds.repair);
+    for (int r : m.regions_remeshed) std::printf("  region %d meshed again\n", r);
+    for (const auto& st : m.region_stats)
+      if (st.unmeshed_front_edges > 0)
+        std::printf("  region %d: %d front edges left open\n", st.region, st.unmeshed_front_edges);
   }
 }
 
@@ -122,7 +132,12 @@ int main(int argc, char** argv) {
       aft::read_region_settings(src + "/configs/sim/head-regions.yaml");
   aft::apply_region_settings(g, settings, surface);
   if (argc > 2 && std::string(argv[1]) == "--fine-runs") {
-    time_fine_runs(lines, surface, settings, std::max(1, std::atoi(argv[2])));
+    const double scale = argc > 3 ? std::atof(argv[3]) : 0.25;
+    if (!(scale > 0.05 && scale <= 4)) {
+      std::fprintf(stderr, "bench_aft: --fine-runs N [SCALE]: SCALE must be in (0.05, 4]\n");
+      return 2;
+    }
+    time_fine_runs(lines, surface, settings, std::max(1, std::atoi(argv[2])), scale);
     return 0;
   }
 
