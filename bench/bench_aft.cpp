@@ -108,6 +108,10 @@ void time_fine_runs(const aft::LineSet& lines, const ScanSurface& surface,
         m.seconds.regions, m.seconds.check, m.thread_seconds.regions, m.thread_seconds.flips,
         m.thread_seconds.smoothing, m.thread_seconds.repair);
     for (int r : m.regions_remeshed) std::printf("  region %d meshed again\n", r);
+    std::printf("  repair: %d operations, %d triangles left below 20 deg (%d at input corners)\n",
+                m.repair_operations[0] + m.repair_operations[1] + m.repair_operations[2] +
+                    m.repair_operations[3] + m.repair_operations[4],
+                m.repair_left_below_20, m.repair_forced_below_20);
     for (const auto& st : m.region_stats)
       if (st.unmeshed_front_edges > 0)
         std::printf("  region %d: %d front edges left open\n", st.region, st.unmeshed_front_edges);

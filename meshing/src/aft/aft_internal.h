@@ -144,14 +144,14 @@ class TriangleCells {
                    const std::vector<Eigen::Vector3d>& P, int also_self = -1);
 
  private:
-  Eigen::AlignedBox<std::int64_t, 3> cells_of(const std::array<int, 3>& f,
-                                              std::span<const Eigen::Vector3d> P) const;
+  using CellBox = Eigen::AlignedBox<std::int64_t, 3>;
+  CellBox cells_of(const std::array<int, 3>& f, std::span<const Eigen::Vector3d> P) const;
   static std::int64_t key(std::int64_t x, std::int64_t y, std::int64_t z) {
     return ((x & 0x1fffff) << 42) | ((y & 0x1fffff) << 21) | (z & 0x1fffff);
   }
   double cell_;
   CellLists lists_;
-  std::vector<Eigen::AlignedBox<std::int64_t, 3>> filed_;  // per triangle: its last filing's cells
+  std::vector<CellBox> filed_;        // per triangle: its last filing's cells
   std::vector<std::uint32_t> stamp_;  // crosses_any: the last query that met a triangle
   std::uint32_t epoch_ = 0;
 };

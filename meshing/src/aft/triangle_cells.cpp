@@ -6,9 +6,9 @@
 
 namespace scanmesh::aft::detail {
 
-Eigen::AlignedBox<std::int64_t, 3> TriangleCells::cells_of(
-    const std::array<int, 3>& f, std::span<const Eigen::Vector3d> P) const {
-  Eigen::AlignedBox<std::int64_t, 3> box;
+TriangleCells::CellBox TriangleCells::cells_of(const std::array<int, 3>& f,
+                                               std::span<const Eigen::Vector3d> P) const {
+  CellBox box;
   for (int v : f) {
     const Eigen::Vector3d c = P[v] / cell_;
     box.extend(Eigen::Matrix<std::int64_t, 3, 1>(static_cast<std::int64_t>(std::floor(c.x())),
@@ -42,6 +42,34 @@ bool shares_edge(const std::array<int, 3>& f, const std::array<int, 3>& g) {
     for (int b : g) shared += a == b;
   return shared >= 2;
 }
+
+Eigen::Vector3d normal_of(std::span<const Eigen::Vector3d> P, const std::array<int, 3>& f) {
+  return (P[f[1]] - P[f[0]]).cross(P[f[2]] - P[f[0]]);
+}
+
+// The corners of g that are not corners of f lie all clearly on one side of f's plane (normal
+// n, not normalised): then g meets f's plane at most in their shared corner, so they cannot
+// cross. Most neighbours are dismissed so, with a few dot products instead of the full test.
+// `tol` (length^3, like n . d) keeps near-coplanar pairs for the full test.
+bool strictly_one_side(std::span<const Eigen::Vector3d> P, const std::array<int, 3>& f,
+                       const Eigen::Vector3d& n, const std::array<int, 3>& g, double tol) {
+  int above = 0, below = 0, own = 0;
+  for (int v : g) {
+    if (v == f[0] || v == f[1] || v == f[2]) {
+      ++own;
+      continue;
+    }
+    const double d = n.dot(P[v] - P[f[0]]);
+    if (d > tol) {
+      ++above;
+    } else if (d < -tol) {
+      ++below;
+    } else {
+      return false;
+    }
+  }
+  return own < 3 && (above == 0 || below == 0);
+}
 }  // namespace
 
 bool TriangleCells::crosses_any(const std::array<int, 3>& f, int self,
@@ -54,6 +82,8 @@ bool TriangleCells::crosses_any(const std::array<int, 3>& f, int self,
   }
   Eigen::AlignedBox3d box;
   for (int v : f) box.extend(P[v]);
+  const Eigen::Vector3d nf = normal_of(P, f);
+  const double tol = 1e-9 * box.diagonal().squaredNorm() * std::sqrt(box.diagonal().squaredNorm());
   const auto cells = cells_of(f, P);
   for (std::int64_t x = cells.min().x(); x <= cells.max().x(); ++x)
     for (std::int64_t y = cells.min().y(); y <= cells.max().y(); ++y)
@@ -68,7 +98,11 @@ bool TriangleCells::crosses_any(const std::array<int, 3>& f, int self,
           if (g[0] < 0 || shares_edge(f, g)) continue;
           Eigen::AlignedBox3d gbox;
           for (int v : g) gbox.extend(P[v]);
-          if (box.intersects(gbox) && triangles_intersect(P, f, g)) return true;
+          if (!box.intersects(gbox)) continue;
+          if (strictly_one_side(P, f, nf, g, tol) ||
+              strictly_one_side(P, g, normal_of(P, g), f, tol))
+            continue;
+          if (triangles_intersect(P, f, g)) return true;
         }
       }
   return false;
