@@ -63,8 +63,8 @@ bool on_wall(const Vector3d& p, const Vector3d& normal) {
 // The 3D crossing test of the post-processing's changes on depth-jump walls (on_wall): there a
 // flip or a move that passes the local tests (angles, normals) can still cross triangles a ring
 // or two away. The triangles are filed by cell at the first question (most regions have no
-// wall), and every change is filed again; since entries are never removed, any earlier state of
-// the same triangle and node vectors (the valence flips' retry goes back to one) is filed too.
+// wall), and every change after it is filed again (changed()). A caller that puts T or P back
+// to an older state calls forget(), since that state may predate the filing.
 class WallCrossingGuard {
  public:
   WallCrossingGuard(const std::vector<std::array<int, 3>>& T, const std::vector<Vector3d>& P)
@@ -83,6 +83,8 @@ class WallCrossingGuard {
   void changed(int t) {
     if (cells_) cells_->insert(t, T_[t], P_);
   }
+  //! T and P were replaced wholesale: file them afresh at the next question.
+  void forget() { cells_.reset(); }
 
  private:
   const std::vector<std::array<int, 3>>& T_;
@@ -196,8 +198,6 @@ int delaunay_flips(std::vector<std::array<int, 3>>& T, const std::vector<Vector3
   // and angle figures. Key order in every pass, so the result is deterministic.
   std::unordered_map<std::uint64_t, std::vector<std::uint64_t>> blocked_by;
   std::vector<std::uint64_t> keys, dirty;
-  // On walls a flip that faces out can still cross a triangle beyond the quad (3 crossing pairs
-  // at an ear's rim at 0.18 of the sample units): `guard` tests it in 3D.
   keys.reserve(mesh.edges().size());
   for (const auto& kv : mesh.edges()) keys.push_back(kv.first);
   for (int pass = 0; pass < 30; ++pass) {
@@ -216,6 +216,8 @@ int delaunay_flips(std::vector<std::array<int, 3>>& T, const std::vector<Vector3
       }
       if (min_angle_after(P, *f) <= min_angle_before(P, *f) + 1e-6) continue;
       if (!faces_out(P, normal, r, a, s) || !faces_out(P, normal, s, b, r)) continue;
+      // On walls a flip that faces out can still cross a triangle beyond the quad (3 crossing
+      // pairs at an ear's rim at 0.18 of the sample units).
       if (on_wall(P[a], normal[a]) || on_wall(P[b], normal[b]) || on_wall(P[r], normal[r]) ||
           on_wall(P[s], normal[s])) {
         if (guard.crosses({r, a, s}, t1, t2) || guard.crosses({s, b, r}, t1, t2)) continue;
@@ -601,8 +603,7 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
     PostResult out;
     auto t0 = Clock::now();
     // One filing of the triangles for the wall tests of all the stages below (tris and nodes
-    // stay the same objects, and every state they pass through is filed; see
-    // WallCrossingGuard).
+    // stay the same objects; the retry without valence flips puts them back and forgets it).
     WallCrossingGuard guard(tris, nodes.pos);
     out.flips = delaunay_flips(tris, nodes.pos, nodes.normal, constraint, guard);
     out.seconds.flips = seconds_since(t0);
@@ -646,6 +647,7 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
       tris = std::move(tris_flipped);
       labels = std::move(labels_flipped);
       nodes = std::move(nodes_flipped);
+      guard.forget();
       std::tie(valence, later_flips) = finish(false);
       ++out.valence_flip_retries;
     }
