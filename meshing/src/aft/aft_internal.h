@@ -88,6 +88,9 @@ class CellLists {
   }
   //! The list of `key`, or nullptr.
   std::vector<int>* find(std::int64_t key) {
+    return const_cast<std::vector<int>*>(std::as_const(*this).find(key));
+  }
+  const std::vector<int>* find(std::int64_t key) const {
     for (std::size_t i = home(key); keys_[i] != kEmpty; i = (i + 1) & mask())
       if (keys_[i] == key) return &lists_[slot_[i]];
     return nullptr;
@@ -129,31 +132,70 @@ class CellLists {
 };
 
 //! Triangles filed under the cells of a uniform 3D grid that their bounding boxes overlap, for
-//! local 3D crossing tests while a mesh changes (the post-processing's moves and flips). Entries
-//! are only ever added: a triangle that moved or was replaced is filed again where it lies now,
-//! and a query tests the triangles as they are now, so stale entries cost time, never answers.
+//! local 3D crossing tests while a mesh changes (the post-processing's moves and flips, the
+//! small-angle repair's candidates). Entries are only ever added: a triangle that moved or was
+//! replaced is filed again where it lies now, and a query meets the triangles as they are now,
+//! so stale entries cost time, never answers. An insert can be recorded and taken back
+//! (undo), for a caller that rolls a trial change back.
 class TriangleCells {
  public:
+  using CellBox = Eigen::AlignedBox<std::int64_t, 3>;
+  //! What inserts added, newest last.
+  struct Undo {
+    std::vector<std::int64_t> keys;              // cells that got an entry
+    std::vector<std::pair<int, CellBox>> filed;  // (t, its filing's cells before)
+  };
+
   explicit TriangleCells(double cell) : cell_(cell) {}
-  //! Files triangle t (its corners f) under every cell its box overlaps.
-  void insert(int t, const std::array<int, 3>& f, std::span<const Eigen::Vector3d> P);
+  //! The cell size for the triangles T: 1.5 x their mean edge (one per triangle), >= 0.5 mm.
+  static double cell_size_for(std::span<const std::array<int, 3>> T,
+                              std::span<const Eigen::Vector3d> P);
+  //! Files triangle t (its corners f) under every cell its box overlaps, unless it already is
+  //! (the cells of its last filing contain them); with `undo`, records what it added.
+  void insert(int t, const std::array<int, 3>& f, std::span<const Eigen::Vector3d> P,
+              Undo* undo = nullptr);
+  //! Takes back what the recorded inserts added, newest first, and clears `undo`.
+  void take_back(Undo& undo);
+  //! Calls visit(u) once for every triangle index u < n_triangles other than `self` filed in a
+  //! cell that f's box overlaps, until visit returns true (then true).
+  template <typename Visit>
+  bool any_near(const std::array<int, 3>& f, int self, std::size_t n_triangles,
+                std::span<const Eigen::Vector3d> P, Visit&& visit) const {
+    if (stamp_.size() < n_triangles) stamp_.resize(n_triangles, 0);
+    if (++epoch_ == 0) {  // wrapped: forget every stamp
+      std::fill(stamp_.begin(), stamp_.end(), 0);
+      epoch_ = 1;
+    }
+    const CellBox cells = cells_of(f, P);
+    for (std::int64_t x = cells.min().x(); x <= cells.max().x(); ++x)
+      for (std::int64_t y = cells.min().y(); y <= cells.max().y(); ++y)
+        for (std::int64_t z = cells.min().z(); z <= cells.max().z(); ++z) {
+          const std::vector<int>* list = lists_.find(key(x, y, z));
+          if (!list) continue;
+          for (int u : *list) {
+            if (u == self || u >= static_cast<int>(n_triangles) || stamp_[u] == epoch_) continue;
+            stamp_[u] = epoch_;
+            if (visit(u)) return true;
+          }
+        }
+    return false;
+  }
   //! True if the triangle f intersects a live triangle of T (f[0] >= 0) filed near it, more than
   //! at shared corners or along a shared edge; T's triangles `self` and `also_self` (f's own
   //! index, the one it replaces, or -1) are not tested.
   bool crosses_any(const std::array<int, 3>& f, int self, std::span<const std::array<int, 3>> T,
-                   const std::vector<Eigen::Vector3d>& P, int also_self = -1);
+                   const std::vector<Eigen::Vector3d>& P, int also_self = -1) const;
 
  private:
-  using CellBox = Eigen::AlignedBox<std::int64_t, 3>;
   CellBox cells_of(const std::array<int, 3>& f, std::span<const Eigen::Vector3d> P) const;
   static std::int64_t key(std::int64_t x, std::int64_t y, std::int64_t z) {
     return ((x & 0x1fffff) << 42) | ((y & 0x1fffff) << 21) | (z & 0x1fffff);
   }
   double cell_;
   CellLists lists_;
-  std::vector<CellBox> filed_;        // per triangle: its last filing's cells
-  std::vector<std::uint32_t> stamp_;  // crosses_any: the last query that met a triangle
-  std::uint32_t epoch_ = 0;
+  std::vector<CellBox> filed_;                // per triangle: its last filing's cells
+  mutable std::vector<std::uint32_t> stamp_;  // any_near: the last query that met a triangle
+  mutable std::uint32_t epoch_ = 0;
 };
 
 //! Every node of the animation mesh: (phi, h) and its point and normal on the surface.

@@ -72,9 +72,7 @@ class WallCrossingGuard {
   //! Does triangle f (replacing T's `self` and `also_self`, or -1) cross another triangle of T?
   bool crosses(const std::array<int, 3>& f, int self, int also_self = -1) {
     if (!cells_) {
-      double edge_sum = 0;
-      for (const auto& t : T_) edge_sum += (P_[t[1]] - P_[t[0]]).norm();
-      cells_.emplace(std::max(0.5, 1.5 * edge_sum / std::max<std::size_t>(1, T_.size())));
+      cells_.emplace(detail::TriangleCells::cell_size_for(T_, P_));
       for (std::size_t t = 0; t < T_.size(); ++t) cells_->insert(static_cast<int>(t), T_[t], P_);
     }
     return cells_->crosses_any(f, self, T_, P_, also_self);

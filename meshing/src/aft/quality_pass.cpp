@@ -61,13 +61,11 @@ class Repair {
         surf_(surface),
         C_(constraint),
         fixed_(boundary_nodes),
-        deviation_goal_(deviation_goal) {
+        deviation_goal_(deviation_goal),
+        grid_(TriangleCells::cell_size_for(T, store.pos)) {
     vt_.resize(S_.pos.size());
     for (std::size_t t = 0; t < T_.size(); ++t)
       for (int v : T_[t]) vt_[v].push_back(static_cast<int>(t));
-    double sum = 0;
-    for (const auto& f : T_) sum += (S_.pos[f[1]] - S_.pos[f[0]]).norm();
-    cell_ = std::max(0.5, 1.5 * sum / std::max<std::size_t>(1, T_.size()));
     for (std::size_t t = 0; t < T_.size(); ++t) insert(static_cast<int>(t));
   }
 
@@ -196,47 +194,14 @@ class Repair {
       Vector3d pos, normal;
     };
     std::vector<Moved> moved;
-    std::vector<std::int64_t> cells;
-    std::vector<std::pair<int, Eigen::AlignedBox<int, 3>>> filed;  // (t, filed_[t] before)
+    TriangleCells::Undo cells;  // the candidate's filings in grid_
     std::size_t n_tris = 0, n_verts = 0;
   };
 
-  // Triangles hashed by the cells their bounding box overlaps (entries are never removed:
-  // a query re-checks the current triangle), for the 3D intersection test of changed ones.
-  std::int64_t cell_key(int x, int y, int z) const {
-    return (static_cast<std::int64_t>(x & 0x1fffff) << 42) |
-           (static_cast<std::int64_t>(y & 0x1fffff) << 21) | (z & 0x1fffff);
-  }
-  Eigen::AlignedBox<int, 3> cells_of(int t) const {
-    Eigen::AlignedBox<int, 3> b;
-    for (int v : T_[t]) {
-      const Vector3d c = S_.pos[v] / cell_;
-      b.extend(Eigen::Vector3i(static_cast<int>(std::floor(c.x())),
-                               static_cast<int>(std::floor(c.y())),
-                               static_cast<int>(std::floor(c.z()))));
-    }
-    return b;
-  }
+  // The triangles by 3D cell (grid_), for the intersection test of changed ones; a candidate's
+  // filings are taken back with it.
   void insert(int t) {
-    if (T_[t][0] < 0) return;
-    const auto b = cells_of(t);
-    // Already filed in every cell it overlaps now: nothing to add. (Without this the lists
-    // grew with every trial move of a Steiner point, since the star's triangles interleave:
-    // ~345 entries per visited cell at an eighth of the sample units, and the crossing tests
-    // took most of the repair's 1.2 thread-seconds there.)
-    if (static_cast<std::size_t>(t) < filed_.size() && filed_[t].contains(b)) return;
-    if (static_cast<std::size_t>(t) >= filed_.size()) filed_.resize(t + 1);
-    journal_.filed.push_back({t, filed_[t]});
-    filed_[t] = b;
-    for (int x = b.min().x(); x <= b.max().x(); ++x)
-      for (int y = b.min().y(); y <= b.max().y(); ++y)
-        for (int z = b.min().z(); z <= b.max().z(); ++z) {
-          const std::int64_t key = cell_key(x, y, z);
-          auto& list = grid_[key];
-          if (!list.empty() && list.back() == t) continue;
-          list.push_back(t);
-          journal_.cells.push_back(key);  // popped again if the candidate is rolled back
-        }
+    if (T_[t][0] >= 0) grid_.insert(t, T_[t], S_.pos, &journal_.cells);
   }
   // Pairs of intersecting triangles involving the triangles changed since begin().
   int new_intersections() const {
@@ -248,24 +213,12 @@ class Repair {
     std::sort(changed.begin(), changed.end());
     changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
     int hits = 0;
-    // The cell lists hold every triangle ever inserted there, often many times over (each
-    // Steiner-point move re-inserts its star), so they are de-duplicated with a stamp per
-    // triangle rather than by sorting (the sorts were the largest cost of the repair).
-    if (stamp_.size() < T_.size()) stamp_.resize(T_.size(), 0);
-    for (int c : changed) {
-      ++stamp_epoch_;
-      const auto b = cells_of(c);
-      for (int x = b.min().x(); x <= b.max().x(); ++x)
-        for (int y = b.min().y(); y <= b.max().y(); ++y)
-          for (int z = b.min().z(); z <= b.max().z(); ++z)
-            if (const auto it = grid_.find(cell_key(x, y, z)); it != grid_.end())
-              for (int u : it->second) {
-                if (u == c || u >= static_cast<int>(T_.size()) || stamp_[u] == stamp_epoch_)
-                  continue;
-                stamp_[u] = stamp_epoch_;
-                if (T_[u][0] >= 0 && triangles_intersect(S_.pos, T_[c], T_[u])) ++hits;
-              }
-    }
+    // The cell lists hold a triangle once per filing, so any_near meets each once per query.
+    for (int c : changed)
+      grid_.any_near(T_[c], c, T_.size(), S_.pos, [&](int u) {
+        if (T_[u][0] >= 0 && triangles_intersect(S_.pos, T_[c], T_[u])) ++hits;
+        return false;
+      });
     return hits;
   }
 
@@ -325,10 +278,7 @@ class Repair {
       S_.pos[it->v] = it->pos;
       S_.normal[it->v] = it->normal;
     }
-    for (auto it = journal_.cells.rbegin(); it != journal_.cells.rend(); ++it)
-      grid_[*it].pop_back();
-    for (auto it = journal_.filed.rbegin(); it != journal_.filed.rend(); ++it)
-      filed_[it->first] = it->second;
+    grid_.take_back(journal_.cells);
     T_.resize(journal_.n_tris);
     L_.resize(journal_.n_tris);
     S_.params.resize(journal_.n_verts);
@@ -796,18 +746,14 @@ class Repair {
   std::size_t fixed_;
   std::vector<std::vector<int>> vt_;
   Journal journal_;
-  double cell_ = 8.0;  // mm: 1.5 x the mean edge
-  std::unordered_map<std::int64_t, std::vector<int>> grid_;
-  std::vector<Eigen::AlignedBox<int, 3>> filed_;    // per triangle: the cells of its last filing
   std::unordered_set<std::uint64_t> stuck_states_;  // optimise: star states that gave no move
   double deviation_goal_;                           // mm; 0: no deviation goal
+  TriangleCells grid_;                              // triangles by 3D cell, for new_intersections
   GridSurfaceDistance grid_distance_{surf_};
   bool scoring_deviation_ = false;  // improve() works on a triangle beyond the deviation goal
   mutable std::unordered_map<Corners, bool, CornersHash> agrees_;       // agrees_with_surface
   mutable std::unordered_map<Corners, double, CornersHash> deviation_;  // excess
   std::unordered_set<Corners, CornersHash> beyond_reach_;  // off the surface, no candidate helped
-  mutable std::vector<std::uint64_t> stamp_;  // new_intersections: last epoch a triangle was seen
-  mutable std::uint64_t stamp_epoch_ = 0;
 };
 
 }  // namespace
