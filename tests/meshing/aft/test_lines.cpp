@@ -116,6 +116,10 @@ regions:
   EXPECT_DOUBLE_EQ(s.default_unit_mm, 5);
   EXPECT_EQ(s.repair_rounds, 0);
   EXPECT_THROW(parse_region_settings("repair_rounds: -2", "r.yaml"), FileFormatError);
+  EXPECT_EQ(s.max_front_steps, 0);  // automatic
+  EXPECT_EQ(parse_region_settings("max_front_steps: 5000", "r.yaml").max_front_steps, 5000);
+  for (const char* bad : {"max_front_steps: -1", "max_front_steps: x", "max_front_steps: 1.5"})
+    EXPECT_THROW(parse_region_settings(bad, "r.yaml"), FileFormatError) << bad;
   EXPECT_TRUE(s.parallel_postprocessing);
   EXPECT_FALSE(
       parse_region_settings("parallel_postprocessing: false", "r.yaml").parallel_postprocessing);
