@@ -213,7 +213,7 @@ class Repair {
     std::sort(changed.begin(), changed.end());
     changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
     int hits = 0;
-    // The cell lists hold a triangle once per filing, so any_near meets each once per query.
+    // A cell may list a triangle once per filing; any_near's stamps meet it once per query.
     for (int c : changed)
       grid_.any_near(T_[c], c, T_.size(), S_.pos, [&](int u) {
         if (T_[u][0] >= 0 && triangles_intersect(S_.pos, T_[c], T_[u])) ++hits;
