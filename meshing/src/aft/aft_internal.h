@@ -107,14 +107,17 @@ class CellLists {
  private:
   static constexpr std::int64_t kEmpty = -1;
   std::size_t mask() const { return keys_.size() - 1; }
+  // Fibonacci hashing: the top bits of the product depend on every bit of the key. (Bits from
+  // 32 up, masked, ignored the x coordinate packed at bit 42 in tables under 1024 slots: cells
+  // differing only in x collided, and probe runs were most of the front search's time.)
   std::size_t home(std::int64_t key) const {
     return static_cast<std::size_t>((static_cast<std::uint64_t>(key) * 0x9E3779B97F4A7C15ull) >>
-                                    32) &
-           mask();
+                                    shift_);
   }
   void grow() {
     std::vector<std::int64_t> keys(2 * keys_.size(), kEmpty);
     std::vector<int> slot(keys.size(), -1);
+    --shift_;
     keys_.swap(keys);
     slot_.swap(slot);
     for (std::size_t j = 0; j < keys.size(); ++j) {
@@ -127,6 +130,7 @@ class CellLists {
   }
   std::vector<std::int64_t> keys_;
   std::vector<int> slot_;  // index into lists_
+  int shift_ = 64 - 6;     // 64 - log2(keys_.size())
   std::vector<std::vector<int>> lists_;
   std::size_t used_ = 0;  // lists_[0, used_) are in use
 };

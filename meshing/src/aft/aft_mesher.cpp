@@ -439,19 +439,19 @@ class Mesher {
     nr.nodes.clear();
     const double r2 = radius * radius;
     const double reach = radius + 0.5 * max_len_;
-    const int n = static_cast<int>(std::ceil(reach / cell_));
-    // The cells of f.M + cell_ * (dx, dy, dz), each coordinate computed once per axis rather
-    // than once per cell (the same values: the sum is componentwise).
-    auto& coords = cell_coords_;
-    coords.clear();
-    for (int k = 0; k < 3; ++k)
-      for (int d = -n; d <= n; ++d) coords.push_back(cell_coord(f.M[k] + cell_ * d));
-    const int w = 2 * n + 1;
-    for (int dx = 0; dx < w; ++dx)
-      for (int dy = 0; dy < w; ++dy)
-        for (int dz = 0; dz < w; ++dz) {
-          std::vector<int>* found =
-              grid_.find(cell_key(coords[dx], coords[w + dy], coords[2 * w + dz]));
+    // The cells that the box f.M +- reach overlaps: an edge of the search has its midpoint
+    // within `reach` of f.M. (3-4 cells per axis; the cube of +-ceil(reach / cell_) cells
+    // around f.M's cell, 5 per axis, looked up twice as many, nearly all of them empty.)
+    std::array<std::int64_t, 3> lo, count;
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = static_cast<std::int64_t>(std::floor((f.M[k] - reach) / cell_));
+      count[k] = static_cast<std::int64_t>(std::floor((f.M[k] + reach) / cell_)) - lo[k] + 1;
+    }
+    for (std::int64_t dx = 0; dx < count[0]; ++dx)
+      for (std::int64_t dy = 0; dy < count[1]; ++dy)
+        for (std::int64_t dz = 0; dz < count[2]; ++dz) {
+          std::vector<int>* found = grid_.find(
+              cell_key((lo[0] + dx) & 0x1fffff, (lo[1] + dy) & 0x1fffff, (lo[2] + dz) & 0x1fffff));
           if (!found) continue;
           auto& list = *found;
           std::size_t keep = 0;
@@ -784,8 +784,7 @@ class Mesher {
   std::unordered_map<std::uint64_t, int> index_;
   double cell_ = 1.0, max_len_ = 0.0;
   CellLists grid_;
-  Near near_;                              // gather's result
-  std::vector<std::int64_t> cell_coords_;  // gather's scratch
+  Near near_;  // gather's result
   int phi_cells_ = 1;
   double phi_cell_ = 2 * M_PI;
   CellLists param_grid_;                       // (phi, h) cells
