@@ -135,6 +135,16 @@ Loaded load(const std::string& grid_path, const std::string& lines_path,
   return l;
 }
 
+// The radius ratio q = 2 r_in / R_circ in bins of 0.1; from 0.5 on drawn as good (q = 0.5 is
+// about a 30-30-120 or a 20-80-80 deg triangle).
+void write_q_histogram_png(const std::filesystem::path& path, const aft::AnimationMeshQuality& q) {
+  std::vector<std::size_t> counts(q.q_histogram.begin(), q.q_histogram.end());
+  std::vector<std::string> labels;
+  for (std::size_t i = 0; i < counts.size(); ++i)
+    labels.push_back(i == 0 ? "0" : "." + std::to_string(i));
+  write_histogram_png(path, counts, labels, "RADIUS RATIO Q = 2 R_IN / R_CIRC", 5);
+}
+
 int run_regions(const RegionsArgs& a) {
   const Loaded l = load(a.grid, a.lines, a.settings);
   std::cout << l.graph.to_text();
@@ -175,6 +185,7 @@ int run_animesh(const AnimeshArgs& a) {
   ro.use_vertex_colors = false;
   write_png(out / "render.png", render_mesh(colored, ro));
   write_quality_histogram_png(out / "min_angle_histogram.png", check);
+  write_q_histogram_png(out / "q_histogram.png", q);
   int unmeshed = 0;
   for (const auto& s : am.region_stats) unmeshed += s.unmeshed_front_edges;
   nlohmann::json j;
@@ -250,7 +261,7 @@ int run_animesh(const AnimeshArgs& a) {
             << t_mesh << " s\n"
             << q.to_text() << "outputs in " << out.string()
             << "/: mesh.ply mesh.obj animesh.json regions.png mesh2d.png render.png "
-               "min_angle_histogram.png\n";
+               "min_angle_histogram.png q_histogram.png\n";
   if (unmeshed > 0) {
     std::cerr << "scanmesh animesh: " << unmeshed
               << " front edges could not be closed; the mesh has gaps (see animesh.json)\n";

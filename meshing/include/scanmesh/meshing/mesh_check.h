@@ -6,6 +6,7 @@
 #include <array>
 #include <cstddef>
 #include <filesystem>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -49,9 +50,9 @@ MeshCheckReport check_mesh(const Mesh& mesh, const MeshCheckOptions& options = {
 std::size_t count_intersecting_faces(const Mesh& mesh, const std::vector<int>* labels = nullptr,
                                      const std::vector<char>* involved = nullptr);
 //! The same pairs themselves (f < g, sorted).
-std::vector<std::array<int, 2>> intersecting_face_pairs(const Mesh& mesh,
-                                                        const std::vector<int>* labels = nullptr,
-                                                        const std::vector<char>* involved = nullptr);
+std::vector<std::array<int, 2>> intersecting_face_pairs(
+    const Mesh& mesh, const std::vector<int>* labels = nullptr,
+    const std::vector<char>* involved = nullptr);
 
 //! Faces f and g (indices into P) intersect improperly: more than touching at shared corners or
 //! along a shared edge (the self-intersection predicate of check_mesh; double precision).
@@ -73,6 +74,14 @@ double triangle_quality(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
 
 //! Bar chart of the min-angle histogram (PNG, written atomically).
 void write_quality_histogram_png(const std::filesystem::path& path, const MeshCheckReport& report,
-                                 const std::string& title = "min angle per triangle [deg]");
+                                 const std::string& title = "MIN ANGLE PER TRIANGLE [DEG]");
+
+//! Bar chart of binned counts with one label per bin (PNG, written atomically); bins from
+//! `first_good_bin` on are green, the others red. The title and labels use the bitmap font of
+//! draw_text (upper case, digits, punctuation). InvalidInputError if there are no bins or the
+//! labels do not match them.
+void write_histogram_png(const std::filesystem::path& path, std::span<const std::size_t> counts,
+                         const std::vector<std::string>& bin_labels, const std::string& title,
+                         std::size_t first_good_bin);
 
 }  // namespace scanmesh
