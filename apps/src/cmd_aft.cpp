@@ -231,7 +231,8 @@ int run_animesh(const AnimeshArgs& a) {
                   {"q_histogram_0.1", q.q_histogram},
                   {"hausdorff_mesh_to_surface_mm", q.hausdorff_mesh_to_surface_mm},
                   {"hausdorff_surface_to_mesh_mm", q.hausdorff_surface_to_mesh_mm},
-                  {"max_vertex_offset_mm", q.max_vertex_offset_mm}};
+                  {"max_vertex_offset_mm", q.max_vertex_offset_mm},
+                  {"vertices_off_surface", q.vertices_off_surface}};
   nlohmann::json val;
   for (const auto& [v, n] : q.valence_histogram) val[std::to_string(v)] = n;
   j["quality"]["valence_histogram"] = val;

@@ -885,7 +885,9 @@ std::string AnimationMeshQuality::to_text() const {
   os << "q = 2 r_in / R_circ: mean " << mean_q << ", min " << min_q << "\n";
   os << "Hausdorff to the scan surface: mesh->surface " << hausdorff_mesh_to_surface_mm
      << " mm, surface->mesh " << hausdorff_surface_to_mesh_mm << " mm; max vertex offset "
-     << max_vertex_offset_mm << " mm\n";
+     << max_vertex_offset_mm << " mm";
+  if (vertices_off_surface > 0) os << ", " << vertices_off_surface << " vertices off the surface";
+  os << "\n";
   os << "valence:";
   for (const auto& [v, n] : valence_histogram) os << " " << v << ":" << n;
   os << "\ntriangles per region:";
@@ -951,9 +953,14 @@ AnimationMeshQuality evaluate_quality(const AnimationMesh& am, const ScanSurface
     q.fraction_min_angle_ge_30 = static_cast<double>(ge30) / T.size();
     q.fraction_min_angle_ge_20 = static_cast<double>(ge20) / T.size();
   }
-  for (const Vector3d& p : P)
+  // Projected from the point itself, not from the vertex's own (phi, h): an independent check.
+  // A vertex that cannot be projected (no surface around it) is counted, not skipped.
+  for (const Vector3d& p : P) {
     if (const auto pr = surface.project(p))
       q.max_vertex_offset_mm = std::max(q.max_vertex_offset_mm, pr->distance);
+    else
+      ++q.vertices_off_surface;
+  }
   // Two-way sampled Hausdorff with exact distances to triangle sets (surface_distance.cpp).
   const detail::TwoWayDistance d = detail::sampled_hausdorff(am, surface, samples);
   q.hausdorff_mesh_to_surface_mm = d.mesh_to_surface_mm;

@@ -1,5 +1,6 @@
 // Animation meshes end to end on analytic surfaces: topology, constraints, openings, surface
 // fidelity, determinism.
+#include <gtest/gtest-spi.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,6 +9,7 @@
 #include <set>
 
 #include "aft_test_support.h"
+#include "scanmesh/core/errors.h"
 #include "scanmesh/meshing/aft/animesh.h"
 #include "scanmesh/meshing/mesh_check.h"
 #include "scanmesh/meshing/mesh_topology.h"
@@ -63,15 +65,54 @@ TEST(AnimationMesh, StitchedMeshIsValid) {
       edges.insert({std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3])});
   for (const auto& e : b.am.line_edges)
     EXPECT_TRUE(edges.count({std::min(e[0], e[1]), std::max(e[0], e[1])}));
-  // The ear line is interior: both its sides are meshed (each edge has two faces).
+  // Independently of line_edges: every segment is a complete edge chain; the ear and fold
+  // lines are interior, so each of their edges has a face on both sides.
+  test::expect_lines_are_edge_chains(b.graph, b.am);
   // Vertices lie on the surface.
   const AnimationMeshQuality q = evaluate_quality(b.am, surface, 3);
   EXPECT_LT(q.max_vertex_offset_mm, 0.01);
+  EXPECT_EQ(q.vertices_off_surface, 0);
   EXPECT_GT(q.min_angle_non_exempt_deg, 20.0) << q.to_text();
   EXPECT_GT(q.fraction_min_angle_ge_30, 0.9) << q.to_text();
   EXPECT_LT(q.hausdorff_mesh_to_surface_mm, 0.5) << q.to_text();
   // Every face is labelled with a meshed region.
   for (int l : m.face_labels) EXPECT_FALSE(b.graph.regions[l].opening);
+}
+
+// The chain check above must be able to fail: a face missing beside the ear line, and a node
+// dropped from a segment chain, are caught.
+TEST(AnimationMesh, EdgeChainCheckCatchesAMissingFaceAndALostNode) {
+  const RangeGrid grid = test::cylinder_grid(100.0, 4.0);
+  const ScanSurface surface(grid);
+  RegionSettings s;
+  s.default_unit_mm = 4.0;
+  const Built b = build(surface, kScene, s);
+  int ear = -1;
+  for (std::size_t i = 0; i < b.lines.lines.size(); ++i)
+    if (b.lines.lines[i].id == "ear") ear = static_cast<int>(i);
+  ASSERT_GE(ear, 0);
+  std::size_t ear_segment = 0;
+  while (b.graph.segments[ear_segment].line != ear) ++ear_segment;
+  const std::vector<int>& chain = b.am.segment_chains[ear_segment];
+  ASSERT_GE(chain.size(), 3u);
+  AnimationMesh missing_face = b.am;
+  auto& T = missing_face.mesh.triangles;
+  const auto beside = [&](const std::array<int, 3>& t) {
+    const auto has = [&](int v) { return std::find(t.begin(), t.end(), v) != t.end(); };
+    return has(chain[0]) && has(chain[1]);
+  };
+  T.erase(std::find_if(T.begin(), T.end(), beside));
+  AnimationMesh lost_node = b.am;
+  lost_node.segment_chains[ear_segment][1] = -1;
+  // The gtest-spi macros run their statement in a local class: it sees statics only.
+  static const RegionGraph* graph;
+  static const AnimationMesh *with_missing_face, *with_lost_node;
+  graph = &b.graph;
+  with_missing_face = &missing_face;
+  with_lost_node = &lost_node;
+  EXPECT_NONFATAL_FAILURE(test::expect_lines_are_edge_chains(*graph, *with_missing_face),
+                          "segment");
+  EXPECT_FATAL_FAILURE(test::expect_lines_are_edge_chains(*graph, *with_lost_node), "lost node");
 }
 
 TEST(AnimationMesh, IdenticalForIdenticalInputAndSeed) {
@@ -87,6 +128,79 @@ TEST(AnimationMesh, IdenticalForIdenticalInputAndSeed) {
   EXPECT_EQ(a.am.mesh.triangles, b.am.mesh.triangles);
   for (std::size_t i = 0; i < a.am.mesh.positions.size(); ++i)
     EXPECT_EQ(a.am.mesh.positions[i], b.am.mesh.positions[i]);
+}
+
+// The seed drives the random front order: another seed, another (equally valid) mesh.
+TEST(AnimationMesh, AnotherSeedGivesAnotherValidMesh) {
+  const RangeGrid grid = test::cylinder_grid(100.0, 4.0);
+  const ScanSurface surface(grid);
+  RegionSettings s;
+  s.default_unit_mm = 5.0;
+  s.strategy = EdgeStrategy::Random;
+  s.seed = 42;
+  const Built a = build(surface, kScene, s);
+  s.seed = 43;
+  const Built b = build(surface, kScene, s);
+  EXPECT_NE(a.am.mesh.triangles, b.am.mesh.triangles);
+  for (const Built* x : {&a, &b}) {
+    const MeshCheckReport rep = check_mesh(x->am.mesh);
+    EXPECT_TRUE(rep.edge_manifold());
+    EXPECT_EQ(rep.self_intersections, 0u);
+    EXPECT_EQ(rep.topology.boundary_loops, 2u);
+    test::expect_lines_are_edge_chains(x->graph, x->am);
+  }
+}
+
+// The user picks the mesher per region: one half of the scene by surface Delaunay refinement,
+// the other by the advancing front, stitched into one mesh along their shared segment.
+TEST(AnimationMesh, AftAndDelaunayRegionsStitchIntoOneMesh) {
+  const RangeGrid grid = test::cylinder_grid(100.0, 4.0);
+  const ScanSurface surface(grid);
+  RegionSettings s;
+  s.default_unit_mm = 4.0;
+  RegionRule rule;
+  rule.name = "right-half";
+  rule.point_px = Eigen::Vector2d(48, 100);  // 560 - 512: right of the splitting line
+  rule.mesher = "delaunay";
+  s.regions.push_back(rule);
+  const Built b = build(surface, kScene, s);
+  std::set<std::string> meshers;
+  for (const auto& st : b.am.region_stats) {
+    meshers.insert(st.mesher);
+    EXPECT_EQ(st.unmeshed_front_edges, 0) << st.region;
+    if (st.mesher == "delaunay") {
+      EXPECT_EQ(b.graph.regions[st.region].name, "right-half");
+    }
+  }
+  EXPECT_EQ(meshers, (std::set<std::string>{"aft", "delaunay"}));
+  const MeshCheckReport rep = check_mesh(b.am.mesh);
+  EXPECT_TRUE(rep.edge_manifold());
+  EXPECT_EQ(rep.self_intersections, 0u);
+  EXPECT_EQ(rep.nonmanifold_vertices, 0u);
+  EXPECT_EQ(rep.topology.boundary_loops, 2u) << rep.to_text();
+  test::expect_lines_are_edge_chains(b.graph, b.am);
+  const AnimationMeshQuality q = evaluate_quality(b.am, surface, 2);
+  EXPECT_LT(q.max_vertex_offset_mm, 0.01);
+  EXPECT_EQ(q.vertices_off_surface, 0);
+}
+
+TEST(AnimationMesh, SettingsPointInNoRegionIsAnErrorNamingTheRule) {
+  const RangeGrid grid = test::cylinder_grid(100.0, 4.0);
+  const ScanSurface surface(grid);
+  LineSet lines = parse_lines_svg("<svg>" + std::string(kScene) + "</svg>", "t.svg");
+  RegionGraph g = analyze_regions(lines, surface);
+  RegionSettings s;
+  RegionRule rule;
+  rule.name = "nowhere";
+  rule.point_px = Eigen::Vector2d(300, 350);  // outside the polygon: no region
+  s.regions.push_back(rule);
+  try {
+    apply_region_settings(g, s, surface);
+    FAIL() << "no error";
+  } catch (const InvalidInputError& e) {
+    EXPECT_NE(std::string(e.what()).find("'nowhere'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("lies in no region"), std::string::npos) << e.what();
+  }
 }
 
 // The sample head (configs/sim/head-lines.svg + head-regions.yaml) on the simulated head scanned
@@ -111,6 +225,7 @@ TEST(AnimationMeshHead, SampleLinesGiveAValidMesh) {
   EXPECT_EQ(rep.self_intersections, 0u);
   const AnimationMeshQuality q = evaluate_quality(am, surface, 2);
   EXPECT_LT(q.max_vertex_offset_mm, 0.01);
+  EXPECT_EQ(q.vertices_off_surface, 0);
   EXPECT_GE(q.fraction_min_angle_ge_30, 0.95) << q.to_text();
   // Every front closed: the only holes are the neck, the crown and the three openings.
   int open_edges = 0;
@@ -118,6 +233,8 @@ TEST(AnimationMeshHead, SampleLinesGiveAValidMesh) {
   EXPECT_EQ(open_edges, 0);
   EXPECT_EQ(rep.topology.boundary_loops, 5u) << rep.to_text();
   EXPECT_EQ(rep.nonmanifold_vertices, 0u);
+  test::expect_lines_are_edge_chains(g, am);
+  ASSERT_TRUE(am.seams.count("back-seam"));
   // Every triangle >= 20 deg, except at a corner where two animation-line edges meet at less
   // than 20 deg (the input fixes that angle). Such corners are counted here from the line
   // edges alone, independently of the mesher; each can force at most one triangle.
@@ -170,6 +287,7 @@ TEST(AnimationMeshHead, SerialPostprocessingIsValidAndMatchesTheParallelOne) {
   EXPECT_GE(q.min_angle_non_exempt_deg, 20.0) << q.to_text();
   EXPECT_GE(q.fraction_min_angle_ge_30, 0.95) << q.to_text();
   EXPECT_LT(q.max_vertex_offset_mm, 0.01);
+  EXPECT_EQ(q.vertices_off_surface, 0);
   // The max-min flips see the same edges either way; the valence flips do not: on the stitched
   // mesh a segment node is inside (ideal valence 6), in its region's job on the border (4 on a
   // straight line). So the counts may differ, by a few per cent (measured 558 vs 524).
@@ -201,6 +319,7 @@ TEST(AnimationMeshHead, HalfTheUnitsStillClosesEveryFrontWithoutIntersections) {
   EXPECT_GT(am.mesh.triangles.size(), 15000u);  // measured 16,977 (sample units: 5,128)
   const AnimationMeshQuality q = evaluate_quality(am, surface, 2);
   EXPECT_LT(q.max_vertex_offset_mm, 0.01);
+  EXPECT_EQ(q.vertices_off_surface, 0);
   EXPECT_GE(q.fraction_min_angle_ge_30, 0.95) << q.to_text();  // measured 98.7 %
   EXPECT_GE(q.min_angle_non_exempt_deg, 20.0) << q.to_text();  // measured 20.71 deg
 }
@@ -244,6 +363,7 @@ TEST(AnimationMeshHead, RepairGoalOf30LiftsAlmostEveryTriangleTo30) {
   const AnimationMeshQuality q = evaluate_quality(am, head.surface, 2);
   EXPECT_TRUE(check_mesh(am.mesh).defect_free());
   EXPECT_LT(q.max_vertex_offset_mm, 0.01);
+  EXPECT_EQ(q.vertices_off_surface, 0);
   EXPECT_GE(q.fraction_min_angle_ge_30, 0.995) << q.to_text();  // measured 99.96 %
   EXPECT_GE(q.min_angle_non_exempt_deg, 22.0) << q.to_text();   // measured 24.5 deg
 }
@@ -273,6 +393,7 @@ TEST(AnimationMeshHead, DeviationGoalBringsTheMeshCloserToTheSurface) {
   EXPECT_LE(on.mesh.positions.size(), off.mesh.positions.size() * 102 / 100);
   EXPECT_TRUE(check_mesh(on.mesh).defect_free());
   EXPECT_LT(q_on.max_vertex_offset_mm, 0.01);
+  EXPECT_EQ(q_on.vertices_off_surface, 0);
   EXPECT_GE(q_on.min_angle_non_exempt_deg, 20.0) << q_on.to_text();
   EXPECT_GE(q_on.fraction_min_angle_ge_30, 0.95) << q_on.to_text();
 }
@@ -299,6 +420,7 @@ TEST(AnimationMeshHead, AnEighthOfTheUnitsClosesEveryFrontWithoutCrossings) {
   EXPECT_TRUE(rep.edge_manifold()) << rep.to_text();
   const AnimationMeshQuality q = evaluate_quality(am, head.surface, 1);
   EXPECT_LT(q.max_vertex_offset_mm, 0.01);
+  EXPECT_EQ(q.vertices_off_surface, 0);
   EXPECT_GE(q.min_angle_non_exempt_deg, 20.0) << q.to_text();
 }
 
@@ -330,7 +452,9 @@ TEST(AnimationMeshHead, RegionOverItsStepBudgetIsMeshedAgainAndReported) {
   const MeshCheckReport rep = check_mesh(am.mesh);
   EXPECT_EQ(rep.self_intersections, 0u) << rep.to_text();
   EXPECT_TRUE(rep.edge_manifold()) << rep.to_text();
-  EXPECT_LT(evaluate_quality(am, head.surface, 1).max_vertex_offset_mm, 0.01);
+  const AnimationMeshQuality q_remeshed = evaluate_quality(am, head.surface, 1);
+  EXPECT_LT(q_remeshed.max_vertex_offset_mm, 0.01);
+  EXPECT_EQ(q_remeshed.vertices_off_surface, 0);
 }
 
 }  // namespace

@@ -97,6 +97,7 @@ struct AnimationMeshQuality {
   std::vector<int> triangles_per_region;
   double hausdorff_mesh_to_surface_mm = 0, hausdorff_surface_to_mesh_mm = 0;
   double max_vertex_offset_mm = 0;  //!< largest vertex distance to the scan surface
+  int vertices_off_surface = 0;     //!< vertices with no surface around them to project onto
 
   std::string to_text() const;
 };
