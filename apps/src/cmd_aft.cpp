@@ -179,10 +179,16 @@ int run_animesh(const AnimeshArgs& a) {
   Mesh colored = am.mesh;
   colored.colors.assign(colored.positions.size(), Rgb8{200, 200, 200});
   for (std::size_t t = 0; t < colored.triangles.size(); ++t)
-    for (int v : colored.triangles[t]) colored.colors[v] = region_color(colored.face_labels[t]);
+    for (int v : colored.triangles[t]) {
+      // Half way to light grey: the regions stay apart and the shading still shows the shape.
+      const Rgb8 c = region_color(colored.face_labels[t]);
+      colored.colors[v] = {static_cast<std::uint8_t>((c.r + 210) / 2),
+                           static_cast<std::uint8_t>((c.g + 210) / 2),
+                           static_cast<std::uint8_t>((c.b + 210) / 2)};
+    }
   RenderOptions ro;
   ro.draw_wireframe = true;
-  ro.use_vertex_colors = false;
+  ro.use_vertex_colors = true;  // region colours: the layout on the shaded surface
   write_png(out / "render.png", render_mesh(colored, ro));
   write_quality_histogram_png(out / "min_angle_histogram.png", check);
   write_q_histogram_png(out / "q_histogram.png", q);
@@ -263,12 +269,21 @@ int run_animesh(const AnimeshArgs& a) {
             << q.to_text() << "outputs in " << out.string()
             << "/: mesh.ply mesh.obj animesh.json regions.png mesh2d.png render.png "
                "min_angle_histogram.png q_histogram.png\n";
+  int status = 0;
   if (unmeshed > 0) {
     std::cerr << "scanmesh animesh: " << unmeshed
               << " front edges could not be closed; the mesh has gaps (see animesh.json)\n";
-    return 1;
+    status = 1;
   }
-  return 0;
+  // The mesher's guarantees, checked on what was written: a failure is reported like a gap.
+  if (!check.edge_manifold() || check.self_intersections > 0 || check.duplicate_faces > 0) {
+    std::cerr << "scanmesh animesh: the mesh fails its check (edge-manifold "
+              << (check.edge_manifold() ? "yes" : "no") << ", " << check.self_intersections
+              << " intersecting face pairs, " << check.duplicate_faces
+              << " duplicate faces; see animesh.json)\n";
+    status = 1;
+  }
+  return status;
 }
 
 }  // namespace
