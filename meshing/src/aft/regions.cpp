@@ -416,6 +416,28 @@ RegionGraph analyze_regions(const LineSet& set, const ScanSurface& surface, doub
     g.cycles.back().winding = static_cast<int>(std::lround(advance / (2 * M_PI)));
     g.cycles.back().area = g.cycles.back().winding == 0 ? shoelace(poly) : 0.0;
   }
+  // A band round the axis between two lines that each go all the way round, with no line
+  // across it, is a face of the graph that no (phi, h) polygon bounds: its two boundary cycles
+  // wind round the axis and belong to different components. Every connected set of lines that
+  // goes round the axis has two such cycles (the sides towards the crown and the neck, which
+  // are left unmeshed like everything outside the lines); a second such set makes a band. It is
+  // an error rather than a silent hole in the mesh: one line across the band cuts it open.
+  {
+    std::vector<int> round_components;
+    std::vector<std::string> round_lines;
+    for (const BoundaryCycle& cy : g.cycles) {
+      if (cy.winding == 0 || std::find(round_components.begin(), round_components.end(),
+                                       cy.component) != round_components.end())
+        continue;
+      round_components.push_back(cy.component);
+      round_lines.push_back(who(g.segments[cy.edges[0].segment].line));
+    }
+    if (round_components.size() > 1)
+      throw FileFormatError(file, round_lines[0] + " and " + round_lines[1] +
+                                      " both go all the way round the axis with no line "
+                                      "between them: the band they enclose is not a region; "
+                                      "draw a line across it (a seam, say) to cut it open");
+  }
   // 8. Regions: counter-clockwise winding-0 cycles; the others go to the smallest region of
   // another component containing them (holes, free-standing internal lines).
   std::vector<int> region_of_cycle(g.cycles.size(), -1);

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "aft_test_support.h"
+#include "scanmesh/core/errors.h"
 #include "scanmesh/meshing/aft/animesh.h"
 #include "scanmesh/meshing/aft/regions.h"
 
@@ -111,6 +112,30 @@ TEST_F(Regions, LinesAcrossThePhiSeam) {
   EXPECT_NE(*a, *b);
   EXPECT_EQ(*b, *b2);
   EXPECT_EQ(g.dangling_ends.size(), 2u);
+}
+
+// Two lines all the way round the axis: with a line across, the band between them is a region
+// (as on the sample head: neck, crown and back seam); without one it is an error that names
+// both lines and says how to cut the band, not a silently unmeshed band.
+TEST_F(Regions, BandBetweenTwoRoundLinesNeedsALineAcross) {
+  const std::string loops =
+      "<polygon id='low' points='0,50 128,50 256,50 384,50'/>"
+      "<polygon id='high' points='0,300 128,300 256,300 384,300'/>";
+  const RegionGraph cut = analyze(loops + "<path id='cut' d='M 100 50 L 100 300'/>");
+  ASSERT_EQ(meshed(cut).size(), 1u);
+  EXPECT_NEAR(meshed(cut)[0].area, px_area(512, 250), 1e-6);
+  try {
+    analyze(loops);
+    FAIL() << "no error";
+  } catch (const FileFormatError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("t.svg"), std::string::npos) << what;
+    EXPECT_NE(what.find("'low'"), std::string::npos) << what;
+    EXPECT_NE(what.find("'high'"), std::string::npos) << what;
+    EXPECT_NE(what.find("all the way round"), std::string::npos) << what;
+  }
+  // One round line alone bounds nothing but the caps: no error, no region.
+  EXPECT_TRUE(meshed(analyze("<polygon id='low' points='0,50 128,50 256,50 384,50'/>")).empty());
 }
 
 TEST_F(Regions, EndPointsSnapOntoLines) {
