@@ -130,6 +130,37 @@ TEST(AnimationMesh, IdenticalForIdenticalInputAndSeed) {
     EXPECT_EQ(a.am.mesh.positions[i], b.am.mesh.positions[i]);
 }
 
+// Curvature-adaptive size: on a cylinder of radius 15 mm the chordal bound sqrt(8 delta / k)
+// with delta = 0.5 mm is 7.7 mm, below the region's unit of 10 mm; the Steiner edges follow
+// it. With the chordal control off (tolerance 0) they follow the unit.
+TEST(AnimationMesh, ChordalToleranceShrinksTheSizeWhereTheSurfaceBends) {
+  const RangeGrid grid = test::cylinder_grid(15.0);
+  const ScanSurface surface(grid);
+  const char* square = "<polygon points='100,60 400,60 400,300 100,300'/>";
+  const auto mean_inner_edge = [&](double tolerance) {
+    RegionSettings s;
+    s.default_unit_mm = 10.0;
+    s.chordal_tolerance_mm = tolerance;
+    const Built b = build(surface, square, s);
+    EXPECT_EQ(b.am.region_stats.at(0).unmeshed_front_edges, 0);
+    double sum = 0;
+    int n = 0;
+    for (const auto& t : b.am.mesh.triangles)
+      for (int k = 0; k < 3; ++k) {
+        const int u = t[k], v = t[(k + 1) % 3];
+        if (!b.am.steiner[u] || !b.am.steiner[v]) continue;  // edges between Steiner points
+        sum += (b.am.mesh.positions[u] - b.am.mesh.positions[v]).norm();
+        ++n;
+      }
+    return sum / std::max(1, n);
+  };
+  const double chordal = std::sqrt(8 * 0.5 * 15.0);
+  const double adaptive = mean_inner_edge(0.5), uniform = mean_inner_edge(0.0);
+  EXPECT_NEAR(uniform, 10.0, 1.5);
+  EXPECT_NEAR(adaptive, chordal, 0.2 * chordal);
+  EXPECT_LT(adaptive, 0.85 * uniform);
+}
+
 // The seed drives the random front order: another seed, another (equally valid) mesh.
 TEST(AnimationMesh, AnotherSeedGivesAnotherValidMesh) {
   const RangeGrid grid = test::cylinder_grid(100.0, 4.0);
