@@ -399,6 +399,14 @@ LineSet parse_lines_svg(std::string_view text, const std::string& file) {
       line.closed = parts[k].second;
       line.source = file + ":" + std::to_string(el.line);
       tidy(line, file, el.line);
+      // class "smooth": the spline through the drawn points, as JSON's "smooth": true (a
+      // polyline is otherwise taken as drawn, straight pieces and corners).
+      if (const auto cls = el.attrs.find("class");
+          cls != el.attrs.end() && has_token(cls->second, "smooth")) {
+        if (line.pixels.size() * kCurvePieces > kMaxPoints)
+          fail(file, el.line, "line '" + line.id + "' has too many points to smooth");
+        line.pixels = catmull_rom(line.pixels, line.closed);
+      }
       set.lines.push_back(std::move(line));
     }
   }

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "aft_test_support.h"
 #include "scanmesh/core/errors.h"
 #include "scanmesh/meshing/aft/animation_lines.h"
@@ -38,6 +40,42 @@ TEST(AnimationLinesSvg, PathCommandsAbsoluteAndRelative) {
   for (const auto& p : c.pixels) found |= (p - Eigen::Vector2d(10, 5)).norm() < 1e-9;
   EXPECT_TRUE(found);
   EXPECT_EQ(c.source, "t.svg:5");
+}
+
+// class "smooth" turns a polyline or polygon into the Catmull-Rom spline through its points:
+// it passes through every drawn point and bulges between them; without it the drawn corners
+// stay. A closed octagon approximating a circle gets much closer to the circle.
+TEST(AnimationLinesSvg, SmoothClassDrawsTheSplineThroughThePoints) {
+  std::string octagon;
+  for (int k = 0; k < 8; ++k)
+    octagon += std::to_string(200 + 40 * std::cos(k * M_PI / 4)) + "," +
+               std::to_string(200 + 40 * std::sin(k * M_PI / 4)) + " ";
+  const LineSet set =
+      parse_lines_svg("<svg><polygon id='o' points='" + octagon +
+                          "'/><polygon class='opening smooth' points='" + octagon + "'/></svg>",
+                      "t.svg");
+  ASSERT_EQ(set.lines.size(), 2u);
+  const AnimationLine &straight = set.lines[0], &smooth = set.lines[1];
+  EXPECT_EQ(straight.pixels.size(), 8u);
+  EXPECT_EQ(smooth.kind, LineKind::Opening);
+  EXPECT_TRUE(smooth.closed);
+  ASSERT_GT(smooth.pixels.size(), 8u * 10);
+  for (const auto& corner : straight.pixels) {
+    double nearest = 1e9;
+    for (const auto& p : smooth.pixels) nearest = std::min(nearest, (p - corner).norm());
+    EXPECT_LT(nearest, 1e-9);  // through every drawn point
+  }
+  const auto worst_radius_error = [](const AnimationLine& l) {
+    double worst = 0;
+    for (std::size_t k = 0; k < l.pixels.size(); ++k) {
+      // The straight pieces' midpoints too (for the octagon: its chords, 40 cos 22.5 = 36.96).
+      const Eigen::Vector2d mid = 0.5 * (l.pixels[k] + l.pixels[(k + 1) % l.pixels.size()]);
+      worst = std::max(worst, std::abs((mid - Eigen::Vector2d(200, 200)).norm() - 40));
+    }
+    return worst;
+  };
+  EXPECT_GT(worst_radius_error(straight), 3.0);
+  EXPECT_LT(worst_radius_error(smooth), 0.5);
 }
 
 TEST(AnimationLinesSvg, ErrorsNameFileAndLine) {
