@@ -466,7 +466,7 @@ void print_lines_constrained(const SM& band, const std::vector<Eigen::Vector2d>&
   const ChainCheck check = check_line_chains(m, lined, segment_pixels(g, surface), surface);
   const aft::AnimationMesh cl = to_animation_mesh(m);
   print(Row{"CGAL, lines constrained, same count", seconds, cl.mesh.positions.size(),
-            cl.mesh.triangles.size(), aft::evaluate_quality(cl, surface, 4)});
+            cl.mesh.triangles.size(), aft::evaluate_quality(cl, surface, 4, &g)});
   std::printf(
       "  lines: %zu of %zu segments traced (%zu only up to a hole of the band from both ends) as "
       "%zu polylines, %zu edges, %zu fixed vertices; %zu nodes not snapped, %zu vertices left off "

@@ -66,7 +66,7 @@ void bench_fine(const aft::LineSet& lines, const ScanSurface& surface,
       amf.thread_seconds.regions, amf.thread_seconds.flips, amf.thread_seconds.smoothing,
       amf.thread_seconds.repair, amf.serial_postprocessing ? " (serial fallback)" : "");
   print(Row{"AFT fine (units / 4)", tf, amf.mesh.positions.size(), amf.mesh.triangles.size(),
-            aft::evaluate_quality(amf, surface, 4)});
+            aft::evaluate_quality(amf, surface, 4, &gf)});
   {
     aft::RegionSettings fine30 = fine;
     fine30.repair_goal_deg = 30.5;
@@ -74,13 +74,13 @@ void bench_fine(const aft::LineSet& lines, const ScanSurface& surface,
     const aft::AnimationMesh am30 = aft::build_animation_mesh(gf, lines, surface, fine30);
     const double t30 = seconds_since(t0);
     print(Row{"AFT fine, repair_goal_deg 30.5", t30, am30.mesh.positions.size(),
-              am30.mesh.triangles.size(), aft::evaluate_quality(am30, surface, 4)});
+              am30.mesh.triangles.size(), aft::evaluate_quality(am30, surface, 4, &gf)});
   }
   fine.repair_rounds = 0;
   aft::AnimationMesh amn;
   const double tn = build_best_of_3(gf, lines, surface, fine, &amn);
   print(Row{"AFT fine, no repair", tn, amn.mesh.positions.size(), amn.mesh.triangles.size(),
-            aft::evaluate_quality(amn, surface, 4)});
+            aft::evaluate_quality(amn, surface, 4, &gf)});
   std::printf(
       "AFT fine without the small-angle repair: %zu triangles in %.3f s = %.0f "
       "triangles/s (repair: %.1f %% of the time above)\n",
@@ -151,7 +151,7 @@ int main(int argc, char** argv) {
   aft::AnimationMesh am;
   const double best = build_best_of_3(g, lines, surface, settings, &am);
   const Row aft_row{"AFT (seed 000), sample head", best, am.mesh.positions.size(),
-                    am.mesh.triangles.size(), aft::evaluate_quality(am, surface, 4)};
+                    am.mesh.triangles.size(), aft::evaluate_quality(am, surface, 4, &g)};
   print(aft_row);
   // The same with the repair lifting every triangle to 30 deg (region setting repair_goal_deg).
   aft::RegionSettings goal30 = settings;
@@ -159,7 +159,7 @@ int main(int argc, char** argv) {
   aft::AnimationMesh am30;
   const double best30 = build_best_of_3(g, lines, surface, goal30, &am30);
   print(Row{"AFT, repair_goal_deg 30.5", best30, am30.mesh.positions.size(),
-            am30.mesh.triangles.size(), aft::evaluate_quality(am30, surface, 4)});
+            am30.mesh.triangles.size(), aft::evaluate_quality(am30, surface, 4, &g)});
   if (aft_only) {
     bench_fine(lines, surface, settings);
     return 0;
@@ -239,7 +239,7 @@ int main(int argc, char** argv) {
   double t_cgal = 0;
   const aft::AnimationMesh cg = cgal_remesh(target, &t_cgal);
   const Row cgal_row{"CGAL isotropic_remeshing (grid)", t_cgal, cg.mesh.positions.size(),
-                     cg.mesh.triangles.size(), aft::evaluate_quality(cg, surface, 4)};
+                     cg.mesh.triangles.size(), aft::evaluate_quality(cg, surface, 4, &g)};
   print(cgal_row);
   // The issue compares at the same vertex count. With the staircase constrained CGAL cannot get
   // there (the ~16,000 constrained grid edges are split but never collapsed, so ~7,700 vertices
@@ -254,7 +254,7 @@ int main(int argc, char** argv) {
     cq = cgal_remesh(edge, &t_eq);
   }
   const Row equal_row{"CGAL, no constraints, same count", t_eq, cq.mesh.positions.size(),
-                      cq.mesh.triangles.size(), aft::evaluate_quality(cq, surface, 4)};
+                      cq.mesh.triangles.size(), aft::evaluate_quality(cq, surface, 4, &g)};
   print(equal_row);
   std::printf(
       "  target edge %.2f mm (AFT mean; %.2f mm for the same vertex count), %zu constrained grid "

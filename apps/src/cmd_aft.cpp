@@ -66,9 +66,10 @@ Image8 draw_regions(const RangeGrid& grid, const ScanSurface& surface, const aft
                     const aft::LineSet& lines) {
   Image8 im = texture_of(grid);
   // Region fill: each pixel centre classified by the graph (openings hatched dark).
+  const aft::RegionLocator locate(g);
   for (int y = 0; y < im.height; ++y)
     for (int x = 0; x < im.width; ++x) {
-      const auto r = g.region_at(aft::pixel_to_param(surface, {x + 0.5, y + 0.5}));
+      const auto r = locate.region_at(aft::pixel_to_param(surface, {x + 0.5, y + 0.5}));
       if (!r) continue;
       const Rgb8 c = g.regions[*r].opening ? Rgb8{20, 20, 20} : region_color(*r);
       const Rgb8 t = im.rgb(x, y);
@@ -166,7 +167,7 @@ int run_animesh(const AnimeshArgs& a) {
   Stopwatch mesh_time;
   const aft::AnimationMesh am = aft::build_animation_mesh(l.graph, l.lines, *l.surface, l.settings);
   const double t_mesh = mesh_time.seconds();
-  const aft::AnimationMeshQuality q = aft::evaluate_quality(am, *l.surface);
+  const aft::AnimationMeshQuality q = aft::evaluate_quality(am, *l.surface, 6, &l.graph);
   const MeshCheckReport check = check_mesh(am.mesh);
   const std::filesystem::path out(a.out);
   std::error_code ec;

@@ -240,12 +240,16 @@ std::optional<std::vector<std::array<int, 3>>> delaunay_mesh_region(NodeStore& n
                                                                     const RegionMeshInput& input,
                                                                     RegionMeshStats& stats);
 
-//! Two-way sampled Hausdorff distance between the mesh and the scan surface (the surface over
-//! the mesh's (phi, h) footprint), `samples` subdivisions per triangle edge.
+//! Two-way sampled Hausdorff distance between the mesh and the scan surface, `samples`
+//! subdivisions per triangle edge for mesh -> surface. Surface -> mesh samples the surface over
+//! the meshed regions of `regions` (every second grid cell centre in phi and h inside a region
+//! that is not an opening), independently of the mesh, so a gap in it counts; without a graph,
+//! the surface over the mesh's own (phi, h) footprint.
 struct TwoWayDistance {
   double mesh_to_surface_mm = 0, surface_to_mesh_mm = 0;
 };
-TwoWayDistance sampled_hausdorff(const AnimationMesh& am, const ScanSurface& surface, int samples);
+TwoWayDistance sampled_hausdorff(const AnimationMesh& am, const ScanSurface& surface, int samples,
+                                 const RegionGraph* regions = nullptr);
 
 //! Distances from points to the same grid triangulation of the surface that sampled_hausdorff
 //! measures against: exact where ScanSurface::project (a local search) can stop in a far local

@@ -898,7 +898,7 @@ std::string AnimationMeshQuality::to_text() const {
 }
 
 AnimationMeshQuality evaluate_quality(const AnimationMesh& am, const ScanSurface& surface,
-                                      int samples) {
+                                      int samples, const RegionGraph* regions) {
   AnimationMeshQuality q;
   const auto& P = am.mesh.positions;
   const auto& T = am.mesh.triangles;
@@ -962,7 +962,7 @@ AnimationMeshQuality evaluate_quality(const AnimationMesh& am, const ScanSurface
       ++q.vertices_off_surface;
   }
   // Two-way sampled Hausdorff with exact distances to triangle sets (surface_distance.cpp).
-  const detail::TwoWayDistance d = detail::sampled_hausdorff(am, surface, samples);
+  const detail::TwoWayDistance d = detail::sampled_hausdorff(am, surface, samples, regions);
   q.hausdorff_mesh_to_surface_mm = d.mesh_to_surface_mm;
   q.hausdorff_surface_to_mesh_mm = d.surface_to_mesh_mm;
   return q;

@@ -99,20 +99,54 @@ std::vector<Vector2d> RegionGraph::cycle_polygon(int c) const {
 }
 
 std::optional<int> RegionGraph::region_at(const Vector2d& param) const {
+  return RegionLocator(*this).region_at(param);
+}
+
+RegionLocator::RegionLocator(const RegionGraph& g) {
+  for (const Region& r : g.regions) {
+    outer_.push_back(make(g.cycle_polygon(r.outer)));
+    holes_.emplace_back();
+    for (int h : r.inner) holes_.back().push_back(make(g.cycle_polygon(h)));
+    area_.push_back(std::fabs(g.cycles[r.outer].area));
+  }
+}
+
+RegionLocator::Polygon RegionLocator::make(std::vector<Vector2d> pts) {
+  Polygon p;
+  p.xmin = p.ymin = 1e300;
+  p.xmax = p.ymax = -1e300;
+  for (const Vector2d& q : pts) {
+    p.xmin = std::min(p.xmin, q.x());
+    p.xmax = std::max(p.xmax, q.x());
+    p.ymin = std::min(p.ymin, q.y());
+    p.ymax = std::max(p.ymax, q.y());
+  }
+  p.pts = std::move(pts);
+  return p;
+}
+
+// point_in_polygon with the box tested first.
+bool RegionLocator::contains(const Polygon& poly, Vector2d q) {
+  if (poly.pts.size() < 3 || q.y() < poly.ymin || q.y() > poly.ymax) return false;
+  const double W = 2 * M_PI;
+  q.x() -= W * std::floor((q.x() - poly.xmin) / W);
+  for (; q.x() <= poly.xmax; q.x() += W)
+    if (point_in_polygon_plain(poly.pts, q)) return true;
+  return false;
+}
+
+std::optional<int> RegionLocator::region_at(const Vector2d& param) const {
   std::optional<int> best;
   double best_area = 1e300;
-  for (std::size_t r = 0; r < regions.size(); ++r) {
-    if (!point_in_polygon(cycle_polygon(regions[r].outer), param, 2 * M_PI)) continue;
+  for (std::size_t r = 0; r < outer_.size(); ++r) {
+    if (area_[r] >= best_area || !contains(outer_[r], param)) continue;
     bool in_hole = false;
-    for (int h : regions[r].inner)
-      if (point_in_polygon(cycle_polygon(h), param, 2 * M_PI)) in_hole = true;
+    for (const Polygon& h : holes_[r])
+      if (contains(h, param)) in_hole = true;
     // A hole's polygon (its component's outside, clockwise) contains the component's inside.
     if (in_hole) continue;
-    const double a = std::fabs(cycles[regions[r].outer].area);
-    if (a < best_area) {
-      best_area = a;
-      best = static_cast<int>(r);
-    }
+    best_area = area_[r];
+    best = static_cast<int>(r);
   }
   return best;
 }

@@ -107,7 +107,8 @@ double GridSurfaceDistance::operator()(const Eigen::Vector3d& x, double radius) 
   return std::sqrt(best);
 }
 
-TwoWayDistance sampled_hausdorff(const AnimationMesh& am, const ScanSurface& surface, int samples) {
+TwoWayDistance sampled_hausdorff(const AnimationMesh& am, const ScanSurface& surface, int samples,
+                                 const RegionGraph* regions) {
   TwoWayDistance out;
   const auto& P = am.mesh.positions;
   const auto& T = am.mesh.triangles;
@@ -134,14 +135,28 @@ TwoWayDistance sampled_hausdorff(const AnimationMesh& am, const ScanSurface& sur
         const Eigen::Vector3d x = w * P[f[0]] + u * P[f[1]] + v * P[f[2]];
         out.mesh_to_surface_mm =
             std::max(out.mesh_to_surface_mm, std::sqrt(surface_tree.squared_distance(point(x))));
-        // The surface over the triangle's footprint: the part of the surface this mesh covers
-        // (openings and unmeshed parts are not sampled).
+        if (regions) continue;
+        // No region graph: the surface over the triangle's footprint, the part of the surface
+        // this mesh covers (openings and unmeshed parts are not sampled).
         const Eigen::Vector2d pp = w * pa + u * pb + v * pc;
         if (const auto y = surface.position(pp.x(), pp.y()))
           out.surface_to_mesh_mm =
               std::max(out.surface_to_mesh_mm, std::sqrt(mesh_tree.squared_distance(point(*y))));
       }
   }
+  if (!regions) return out;
+  // The surface over the meshed regions, whatever the mesh covers of it.
+  const RegionLocator locate(*regions);
+  for (int j = 0; j < surface.n_h(); j += 2)
+    for (int i = 0; i < surface.n_phi(); i += 2) {
+      const double phi = surface.phi0() + (i + 0.5) * surface.dphi();
+      const double h = surface.h0() + (j + 0.5) * surface.dh();
+      const auto r = locate.region_at({phi, h});
+      if (!r || regions->regions[*r].opening) continue;
+      if (const auto y = surface.position(phi, h))
+        out.surface_to_mesh_mm =
+            std::max(out.surface_to_mesh_mm, std::sqrt(mesh_tree.squared_distance(point(*y))));
+    }
   return out;
 }
 

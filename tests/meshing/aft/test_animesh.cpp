@@ -130,6 +130,38 @@ TEST(AnimationMesh, IdenticalForIdenticalInputAndSeed) {
     EXPECT_EQ(a.am.mesh.positions[i], b.am.mesh.positions[i]);
 }
 
+// Surface -> mesh over the regions: a hole cut into the mesh shows in the distance (the
+// surface there is far from every triangle), which sampling the surface under the mesh's own
+// triangles cannot see.
+TEST(AnimationMesh, SurfaceToMeshDistanceSeesAGapInTheMesh) {
+  const RangeGrid grid = test::cylinder_grid(100.0, 4.0);
+  const ScanSurface surface(grid);
+  RegionSettings s;
+  s.default_unit_mm = 4.0;
+  const Built b = build(surface, "<polygon points='100,60 300,60 300,300 100,300'/>", s);
+  const AnimationMeshQuality whole = evaluate_quality(b.am, surface, 2, &b.graph);
+  EXPECT_LT(whole.hausdorff_surface_to_mesh_mm, 0.5) << whole.to_text();
+  // Remove every triangle with a corner within 15 mm of the region's middle.
+  AnimationMesh cut = b.am;
+  const Eigen::Vector3d middle = *surface.position(pixel_to_param(surface, {200, 180}).x(),
+                                                   pixel_to_param(surface, {200, 180}).y());
+  std::vector<std::array<int, 3>> kept;
+  std::vector<int> labels;
+  for (std::size_t t = 0; t < cut.mesh.triangles.size(); ++t) {
+    bool near = false;
+    for (int v : cut.mesh.triangles[t]) near |= (cut.mesh.positions[v] - middle).norm() < 15;
+    if (near) continue;
+    kept.push_back(cut.mesh.triangles[t]);
+    labels.push_back(cut.mesh.face_labels[t]);
+  }
+  ASSERT_LT(kept.size(), cut.mesh.triangles.size());
+  cut.mesh.triangles = kept;
+  cut.mesh.face_labels = labels;
+  const AnimationMeshQuality with_gap = evaluate_quality(cut, surface, 2, &b.graph);
+  EXPECT_GT(with_gap.hausdorff_surface_to_mesh_mm, 10.0) << with_gap.to_text();
+  EXPECT_LT(evaluate_quality(cut, surface, 2).hausdorff_surface_to_mesh_mm, 0.5);  // blind
+}
+
 // Curvature-adaptive size: on a cylinder of radius 15 mm the chordal bound sqrt(8 delta / k)
 // with delta = 0.5 mm is 7.7 mm, below the region's unit of 10 mm; the Steiner edges follow
 // it. With the chordal control off (tolerance 0) they follow the unit.

@@ -102,7 +102,12 @@ struct AnimationMeshQuality {
   std::string to_text() const;
 };
 
+//! The quality report. The Hausdorff distances are sampled (`samples_per_triangle` subdivisions
+//! per edge, mesh -> surface); surface -> mesh samples the surface over the meshed regions of
+//! `regions` (every second grid cell), so a gap in the mesh counts, or without a graph the
+//! surface under the mesh's own triangles.
 AnimationMeshQuality evaluate_quality(const AnimationMesh& am, const ScanSurface& surface,
-                                      int samples_per_triangle = 6);
+                                      int samples_per_triangle = 6,
+                                      const RegionGraph* regions = nullptr);
 
 }  // namespace scanmesh::aft

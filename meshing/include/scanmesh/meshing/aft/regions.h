@@ -66,6 +66,25 @@ struct RegionGraph {
   std::string to_text() const;
 };
 
+//! RegionGraph::region_at for many points (pictures, sampled distances): the regions'
+//! polygons are traced once and tested inside their boxes only. The same answers.
+class RegionLocator {
+ public:
+  explicit RegionLocator(const RegionGraph& graph);
+  std::optional<int> region_at(const Eigen::Vector2d& param) const;
+
+ private:
+  struct Polygon {
+    std::vector<Eigen::Vector2d> pts;  // phi unwrapped along the cycle
+    double xmin = 0, xmax = 0, ymin = 0, ymax = 0;
+  };
+  static Polygon make(std::vector<Eigen::Vector2d> pts);
+  static bool contains(const Polygon& poly, Eigen::Vector2d q);
+  std::vector<Polygon> outer_;
+  std::vector<std::vector<Polygon>> holes_;
+  std::vector<double> area_;  // |outer cycle area|: the smallest containing region wins
+};
+
 //! Builds the graph. End points within `snap_px` texture pixels of another line are moved onto
 //! it (a T junction); end points within snap_px of each other are joined. Throws
 //! FileFormatError naming the file and line for a self-intersecting line or lines that overlap.
