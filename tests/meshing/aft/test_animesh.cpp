@@ -130,6 +130,33 @@ TEST(AnimationMesh, IdenticalForIdenticalInputAndSeed) {
     EXPECT_EQ(a.am.mesh.positions[i], b.am.mesh.positions[i]);
 }
 
+// A seam with a user node spacing: its nodes are spaced by it (d' = s / (floor(s / d) + 1),
+// between 2/3 d and d for a seam a few spacings long), the exported list runs along the line
+// from its first point to its last and is a chain of mesh edges, whatever the regions' units.
+TEST(AnimationMesh, SeamNodesFollowTheUserSpacingAndAreExportedInLineOrder) {
+  const RangeGrid grid = test::cylinder_grid(100.0, 4.0);
+  const ScanSurface surface(grid);
+  RegionSettings s;
+  s.default_unit_mm = 6.0;
+  const Built b = build(surface,
+                        "<polygon points='100,60 300,60 300,300 100,300'/>"
+                        "<path id='join' class='seam' data-spacing-mm='3' d='M 200 60 L 200 300'/>",
+                        s);
+  ASSERT_EQ(b.am.seams.count("join"), 1u);
+  const std::vector<int>& seam = b.am.seams.at("join");
+  const auto& P = b.am.mesh.positions;
+  ASSERT_GE(seam.size(), 10u);
+  for (std::size_t k = 1; k < seam.size(); ++k) {
+    const double d = (P[seam[k]] - P[seam[k - 1]]).norm();
+    EXPECT_GT(d, 2.0) << k;
+    EXPECT_LE(d, 3.0 + 1e-6) << k;
+  }
+  // Line order: from the point drawn first (row 60, low h) to the last (row 300).
+  EXPECT_LT(P[seam.front()].z(), P[seam.back()].z());
+  for (std::size_t k = 1; k < seam.size(); ++k) EXPECT_GT(P[seam[k]].z(), P[seam[k - 1]].z());
+  test::expect_lines_are_edge_chains(b.graph, b.am);
+}
+
 // Surface -> mesh over the regions: a hole cut into the mesh shows in the distance (the
 // surface there is far from every triangle), which sampling the surface under the mesh's own
 // triangles cannot see.
