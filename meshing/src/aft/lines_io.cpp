@@ -303,11 +303,16 @@ void set_kind(AnimationLine& line, const Element& el, const std::string& file) {
   }
 }
 
-std::vector<Vector2d> catmull_rom(const std::vector<Vector2d>& p, bool closed) {
+// Through the points p (x unwrapped); a closed curve continues periodically, each turn shifted
+// by `turn` in x (0, or the width for a line that goes round the axis).
+std::vector<Vector2d> catmull_rom(const std::vector<Vector2d>& p, bool closed, double turn) {
   const int n = static_cast<int>(p.size());
   if (n < 3) return p;
   auto at = [&](int k) -> Vector2d {
-    if (closed) return p[((k % n) + n) % n];
+    if (closed) {
+      const int wraps = static_cast<int>(std::floor(static_cast<double>(k) / n));
+      return p[k - wraps * n] + Vector2d(wraps * turn, 0);
+    }
     if (k < 0) return 2 * p[0] - p[1];
     if (k >= n) return 2 * p[n - 1] - p[n - 2];
     return p[k];
@@ -400,12 +405,13 @@ LineSet parse_lines_svg(std::string_view text, const std::string& file) {
       line.source = file + ":" + std::to_string(el.line);
       tidy(line, file, el.line);
       // class "smooth": the spline through the drawn points, as JSON's "smooth": true (a
-      // polyline is otherwise taken as drawn, straight pieces and corners).
+      // polyline is otherwise taken as drawn, straight pieces and corners). It is traced by
+      // line_curve, after the points are joined across the phi seam.
       if (const auto cls = el.attrs.find("class");
           cls != el.attrs.end() && has_token(cls->second, "smooth")) {
         if (line.pixels.size() * kCurvePieces > kMaxPoints)
           fail(file, el.line, "line '" + line.id + "' has too many points to smooth");
-        line.pixels = catmull_rom(line.pixels, line.closed);
+        line.smooth = true;
       }
       set.lines.push_back(std::move(line));
     }
@@ -433,7 +439,6 @@ LineSet parse_lines_json(std::string_view text, const std::string& file) {
     if (!jl.is_object()) throw FileFormatError(file, where + " is not an object");
     AnimationLine line;
     line.id = "line-" + std::to_string(index);
-    bool smooth = false;
     for (const auto& [key, v] : jl.items()) {
       if (key == "id") {
         if (!v.is_string()) throw FileFormatError(file, where + ".id must be a string");
@@ -457,7 +462,7 @@ LineSet parse_lines_json(std::string_view text, const std::string& file) {
         line.closed = v.get<bool>();
       } else if (key == "smooth") {
         if (!v.is_boolean()) throw FileFormatError(file, where + ".smooth must be true or false");
-        smooth = v.get<bool>();
+        line.smooth = v.get<bool>();
       } else if (key == "points") {
         if (!v.is_array()) throw FileFormatError(file, where + ".points must be an array");
         if (v.size() > kMaxPoints) throw FileFormatError(file, where + " has too many points");
@@ -472,7 +477,8 @@ LineSet parse_lines_json(std::string_view text, const std::string& file) {
         throw FileFormatError(file, where + ": unknown key \"" + key + "\"");
       }
     }
-    if (smooth) line.pixels = catmull_rom(line.pixels, line.closed);
+    if (line.smooth && line.pixels.size() * kCurvePieces > kMaxPoints)
+      throw FileFormatError(file, where + " has too many points to smooth");
     line.source = file + ":" + where;
     std::vector<Vector2d> p;
     for (const Vector2d& q : line.pixels)
@@ -508,7 +514,24 @@ Vector2d param_to_pixel(const ScanSurface& s, const Vector2d& p) {
   return {(p.x() - s.phi0()) / s.dphi() + 0.5, (p.y() - s.h0()) / s.dh() + 0.5};
 }
 
+std::vector<Vector2d> line_curve(const AnimationLine& line, double width) {
+  std::vector<Vector2d> joined;
+  joined.reserve(line.pixels.size());
+  for (const Vector2d& p : line.pixels) {
+    Vector2d q = p;
+    if (!joined.empty()) q.x() += width * std::round((joined.back().x() - q.x()) / width);
+    joined.push_back(q);
+  }
+  if (!line.smooth) return joined;
+  // A closed line's last point joins its first one turn on if the line goes round the axis.
+  const double turn = line.closed && !joined.empty()
+                          ? width * std::round((joined.back().x() - joined.front().x()) / width)
+                          : 0.0;
+  return catmull_rom(joined, line.closed, turn);
+}
+
 void validate_lines(const LineSet& set, const ScanSurface& surface) {
+  const double W = surface.n_phi();
   for (const AnimationLine& line : set.lines) {
     const std::string who = "line '" + line.id + "' (" + line.source + ")";
     auto leaves_at = [&](const Vector2d& p) {
@@ -518,8 +541,6 @@ void validate_lines(const LineSet& set, const ScanSurface& surface) {
          << ")";
       throw FileFormatError(set.file, os.str());
     };
-    const std::size_t n = line.pixels.size();
-    const std::size_t pieces = line.closed ? n : n - 1;
     double length_px = 0;
     // Lines may run past the texture's right edge (across the phi seam), but not by turns: a
     // far-off x would wrap round many times and make the sampling below loop for ever.
@@ -533,8 +554,15 @@ void validate_lines(const LineSet& set, const ScanSurface& surface) {
       } else if (!(p.y() >= 0.5 && p.y() <= surface.n_h() - 0.5)) {
         leaves_at(p);
       }
+    // The curve as analyze_regions uses it (joined across the seam, smoothed); each piece is
+    // followed the short way round, the closing piece of a line that goes round included.
+    const std::vector<Vector2d> curve = line_curve(line, W);
+    const std::size_t n = curve.size();
+    const std::size_t pieces = line.closed ? n : n - 1;
     for (std::size_t k = 0; k < pieces; ++k) {
-      const Vector2d a = line.pixels[k], b = line.pixels[(k + 1) % n];
+      const Vector2d a = curve[k];
+      Vector2d b = curve[(k + 1) % n];
+      b.x() += W * std::round((a.x() - b.x()) / W);
       length_px += (b - a).norm();
       const int steps = std::max(1, static_cast<int>(std::ceil((b - a).norm() * 4)));
       for (int s = 0; s <= steps; ++s) {

@@ -178,11 +178,7 @@ RegionGraph analyze_regions(const LineSet& set, const ScanSurface& surface, doub
   std::vector<bool> closed(set.lines.size());
   for (std::size_t l = 0; l < set.lines.size(); ++l) {
     closed[l] = set.lines[l].closed;
-    for (const Vector2d& p : set.lines[l].pixels) {
-      Vector2d q = p;
-      if (!L[l].empty()) q.x() += W * std::round((L[l].back().x() - q.x()) / W);
-      L[l].push_back(q);
-    }
+    L[l] = line_curve(set.lines[l], W);
   }
   auto pieces_of = [&](std::size_t l) {
     std::vector<Piece> out;

@@ -56,26 +56,30 @@ TEST(AnimationLinesSvg, SmoothClassDrawsTheSplineThroughThePoints) {
                       "t.svg");
   ASSERT_EQ(set.lines.size(), 2u);
   const AnimationLine &straight = set.lines[0], &smooth = set.lines[1];
-  EXPECT_EQ(straight.pixels.size(), 8u);
+  EXPECT_FALSE(straight.smooth);
+  EXPECT_TRUE(smooth.smooth);
   EXPECT_EQ(smooth.kind, LineKind::Opening);
   EXPECT_TRUE(smooth.closed);
-  ASSERT_GT(smooth.pixels.size(), 8u * 10);
-  for (const auto& corner : straight.pixels) {
+  const std::vector<Eigen::Vector2d> polygon = line_curve(straight, 512),
+                                     spline = line_curve(smooth, 512);
+  EXPECT_EQ(polygon.size(), 8u);
+  ASSERT_GT(spline.size(), 8u * 10);
+  for (const auto& corner : polygon) {
     double nearest = 1e9;
-    for (const auto& p : smooth.pixels) nearest = std::min(nearest, (p - corner).norm());
+    for (const auto& p : spline) nearest = std::min(nearest, (p - corner).norm());
     EXPECT_LT(nearest, 1e-9);  // through every drawn point
   }
-  const auto worst_radius_error = [](const AnimationLine& l) {
+  const auto worst_radius_error = [](const std::vector<Eigen::Vector2d>& c) {
     double worst = 0;
-    for (std::size_t k = 0; k < l.pixels.size(); ++k) {
+    for (std::size_t k = 0; k < c.size(); ++k) {
       // The straight pieces' midpoints too (for the octagon: its chords, 40 cos 22.5 = 36.96).
-      const Eigen::Vector2d mid = 0.5 * (l.pixels[k] + l.pixels[(k + 1) % l.pixels.size()]);
+      const Eigen::Vector2d mid = 0.5 * (c[k] + c[(k + 1) % c.size()]);
       worst = std::max(worst, std::abs((mid - Eigen::Vector2d(200, 200)).norm() - 40));
     }
     return worst;
   };
-  EXPECT_GT(worst_radius_error(straight), 3.0);
-  EXPECT_LT(worst_radius_error(smooth), 0.5);
+  EXPECT_GT(worst_radius_error(polygon), 3.0);
+  EXPECT_LT(worst_radius_error(spline), 0.5);
 }
 
 TEST(AnimationLinesSvg, ErrorsNameFileAndLine) {
@@ -100,7 +104,8 @@ TEST(AnimationLinesJson, FormAndErrors) {
       "l.json");
   ASSERT_EQ(set.lines.size(), 2u);
   EXPECT_EQ(set.lines[0].kind, LineKind::Opening);
-  EXPECT_GT(set.lines[0].pixels.size(), 20u);  // the spline is flattened
+  EXPECT_TRUE(set.lines[0].smooth);
+  EXPECT_GT(line_curve(set.lines[0], 512).size(), 20u);  // the spline is flattened
   EXPECT_EQ(set.lines[1].id, "line-2");
   EXPECT_THROW(parse_lines_json(R"({"lines": [{"points": [[0, 0]]}]})", "l.json"), FileFormatError);
   EXPECT_THROW(

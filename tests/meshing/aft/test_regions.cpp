@@ -138,6 +138,26 @@ TEST_F(Regions, BandBetweenTwoRoundLinesNeedsALineAcross) {
   EXPECT_TRUE(meshed(analyze("<polygon id='low' points='0,50 128,50 256,50 384,50'/>")).empty());
 }
 
+// A smooth line across the phi seam is joined across it before it is smoothed: the spline
+// through 500 -> 10 (= 522) stays next to the seam instead of running round the head.
+TEST_F(Regions, SmoothLineAcrossThePhiSeamStaysAtTheSeam) {
+  const std::string box = "points='500,100 10,100 10,150 500,150'";
+  const RegionGraph straight = analyze("<polygon " + box + "/>");
+  const RegionGraph smooth = analyze("<polygon class='smooth' " + box + "/>");
+  ASSERT_EQ(meshed(straight).size(), 1u);
+  ASSERT_EQ(meshed(smooth).size(), 1u);
+  EXPECT_NEAR(meshed(straight)[0].area, px_area(22, 50), 1e-9);
+  // The spline bulges outwards between the corners it passes through: a little more area.
+  EXPECT_GT(meshed(smooth)[0].area, px_area(22, 50));
+  EXPECT_LT(meshed(smooth)[0].area, px_area(30, 60));
+  for (const auto& seg : smooth.segments)
+    for (const auto& p : seg.pts) {
+      const double x = param_to_pixel(surface_, p).x();
+      const double from_seam = std::min(std::fabs(x - 512 * std::round(x / 512)), 256.0);
+      EXPECT_LT(from_seam, 20.0) << x;
+    }
+}
+
 TEST_F(Regions, EndPointsSnapOntoLines) {
   // The middle line stops 1 px short of the right border: snapped into a T junction.
   const RegionGraph g = analyze(

@@ -4,8 +4,10 @@
 //
 // Input: an SVG drawn over the texture PNG (coordinates = texture pixels: x = phi column,
 // y = h row, row 0 at the image top = the lowest h) or the same lines as JSON
-// (docs/formats.md, "Animation lines"). Bezier curves are the splines; they are flattened to
-// 0.02 px, which is the exact geometry every later step (intersections, arc length) uses.
+// (docs/formats.md, "Animation lines"). Bezier curves are flattened to 24 pieces per curve
+// segment; a polyline marked smooth becomes the centripetal Catmull-Rom spline through its
+// points (line_curve). That curve is the exact geometry every later step (intersections, arc
+// length) uses.
 #pragma once
 
 #include <Eigen/Core>
@@ -27,8 +29,10 @@ struct AnimationLine {
   LineKind kind = LineKind::Normal;
   double node_spacing_mm = 0;           //!< seams: the user's node spacing; 0 = derived
   bool closed = false;                  //!< polygon, path ending in Z, JSON "closed"
-  std::vector<Eigen::Vector2d> pixels;  //!< flattened curve in texture pixels (x, y)
-  std::string source;                   //!< "file:line" where the element starts
+  std::vector<Eigen::Vector2d> pixels;  //!< drawn points in texture pixels (curves flattened)
+  //! SVG class "smooth" / JSON "smooth": the line is the spline through `pixels` (line_curve).
+  bool smooth = false;
+  std::string source;  //!< "file:line" where the element starts
 };
 
 struct LineSet {
@@ -47,6 +51,13 @@ LineSet parse_lines_svg(std::string_view text, const std::string& file);
 //! "closed": false, "smooth": true, "points": [[x, y], ...]}]}; "smooth" draws a centripetal
 //! Catmull-Rom spline through the points (flattened like the SVG curves).
 LineSet parse_lines_json(std::string_view text, const std::string& file);
+
+//! The line as every later step sees it, in pixels: consecutive points less than half the
+//! texture's width apart are joined across the phi seam (x unwrapped along the line: 500 then
+//! 10 is 500 then 522 on a 512 wide texture), then a smooth line becomes the centripetal
+//! Catmull-Rom spline through the joined points (24 pieces per span; a closed line that goes
+//! round the axis continues one turn on).
+std::vector<Eigen::Vector2d> line_curve(const AnimationLine& line, double width_px);
 
 //! Reads .svg or .json by extension (IoError if unreadable).
 LineSet read_lines(const std::filesystem::path& path);
