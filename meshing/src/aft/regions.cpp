@@ -4,6 +4,7 @@
 // same in both.
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <numeric>
 #include <sstream>
 
@@ -446,27 +447,46 @@ RegionGraph analyze_regions(const LineSet& set, const ScanSurface& surface, doub
     g.cycles.back().winding = static_cast<int>(std::lround(advance / (2 * M_PI)));
     g.cycles.back().area = g.cycles.back().winding == 0 ? shoelace(poly) : 0.0;
   }
-  // A band round the axis between two lines that each go all the way round, with no line
-  // across it, is a face of the graph that no (phi, h) polygon bounds: its two boundary cycles
-  // wind round the axis and belong to different components. Every connected set of lines that
-  // goes round the axis has two such cycles (the sides towards the crown and the neck, which
-  // are left unmeshed like everything outside the lines); a second such set makes a band. It is
-  // an error rather than a silent hole in the mesh: one line across the band cuts it open.
+  // A band round the axis between two sets of lines that each go all the way round, with no
+  // line joining them, is a face of the graph that no (phi, h) polygon bounds: its two boundary
+  // cycles wind round the axis and belong to different components. Every connected set of
+  // lines that goes round has two such cycles (its sides towards the crown and the neck, left
+  // unmeshed like everything outside the lines); a second such set makes a band. It is an error
+  // rather than a silent hole in the mesh: one line joining the sets cuts the band open.
   {
     std::vector<int> round_components;
-    std::vector<std::string> round_lines;
+    std::vector<std::string> round_sets;  // per component: the lines that carry its turn
     for (const BoundaryCycle& cy : g.cycles) {
       if (cy.winding == 0 || std::find(round_components.begin(), round_components.end(),
                                        cy.component) != round_components.end())
         continue;
       round_components.push_back(cy.component);
-      round_lines.push_back(who(g.segments[cy.edges[0].segment].line));
+      // Lines walked one way only: a line hanging off the loop is walked there and back.
+      std::map<int, int> walked;
+      for (const HalfEdgeRef& e : cy.edges) walked[e.segment] += e.forward ? 1 : -1;
+      std::vector<int> carrying;
+      for (const auto& [segment, net] : walked) {
+        const int line = g.segments[segment].line;
+        if (net != 0 && std::find(carrying.begin(), carrying.end(), line) == carrying.end())
+          carrying.push_back(line);
+      }
+      std::string names;
+      for (std::size_t k = 0; k < carrying.size(); ++k)
+        names += (k ? (k + 1 == carrying.size() ? " and " : ", ") : "") +
+                 ("'" + set.lines[carrying[k]].id + "'");
+      round_sets.push_back(carrying.size() > 1 ? "lines " + names + " (together)"
+                                               : "line " + names);
     }
-    if (round_components.size() > 1)
-      throw FileFormatError(file, round_lines[0] + " and " + round_lines[1] +
-                                      " both go all the way round the axis with no line "
-                                      "between them: the band they enclose is not a region; "
-                                      "draw a line across it (a seam, say) to cut it open");
+    if (round_components.size() > 1) {
+      std::string list;
+      for (std::size_t k = 0; k < round_sets.size(); ++k) list += (k ? "; " : "") + round_sets[k];
+      throw FileFormatError(
+          file, std::to_string(round_sets.size()) +
+                    " separate sets of lines go all the way round the axis (" + list +
+                    ") and no line joins them: the bands between them are not regions; draw a "
+                    "line joining each pair of neighbouring sets (a seam, say) to cut the bands "
+                    "open");
+    }
   }
   // 8. Regions: counter-clockwise winding-0 cycles; the others go to the smallest region of
   // another component containing them (holes, free-standing internal lines).

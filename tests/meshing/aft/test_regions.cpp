@@ -130,9 +130,23 @@ TEST_F(Regions, BandBetweenTwoRoundLinesNeedsALineAcross) {
   } catch (const FileFormatError& e) {
     const std::string what = e.what();
     EXPECT_NE(what.find("t.svg"), std::string::npos) << what;
-    EXPECT_NE(what.find("'low'"), std::string::npos) << what;
-    EXPECT_NE(what.find("'high'"), std::string::npos) << what;
+    EXPECT_NE(what.find("line 'low'"), std::string::npos) << what;
+    EXPECT_NE(what.find("line 'high'"), std::string::npos) << what;
     EXPECT_NE(what.find("all the way round"), std::string::npos) << what;
+  }
+  // A line hanging off a round line is not named as going round; two open lines that go
+  // round together are named together.
+  try {
+    analyze(
+        "<path id='stub' d='M 100 50 L 100 80'/>"
+        "<path id='west' d='M 0 300 L 256 300'/><path id='east' d='M 256 300 L 512 300'/>" +
+        std::string("<polygon id='low' points='0,50 128,50 256,50 384,50'/>"));
+    FAIL() << "no error";
+  } catch (const FileFormatError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.find("'stub'"), std::string::npos) << what;
+    EXPECT_NE(what.find("line 'low'"), std::string::npos) << what;
+    EXPECT_NE(what.find("lines 'west' and 'east' (together)"), std::string::npos) << what;
   }
   // One round line alone bounds nothing but the caps: no error, no region.
   EXPECT_TRUE(meshed(analyze("<polygon id='low' points='0,50 128,50 256,50 384,50'/>")).empty());
