@@ -18,6 +18,7 @@ enum ExitCode : int {
   kNotEdgeManifold = 6,  //!< `scanmesh check`: the mesh has an edge with more than two faces
   kDeviceFailure = 7,    //!< a camera or board failed, vanished, stalled or answered nonsense
   kOutOfTolerance = 8,   //!< `scanmesh check-calibration`: a measured error exceeds its tolerance
+  kMeshIncomplete = 9,   //!< `scanmesh animesh`: written, but with open fronts or failing its check
 };
 
 //! Runs a command; maps scanmesh's typed errors to an exit code and one line on stderr.

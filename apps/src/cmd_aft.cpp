@@ -270,21 +270,21 @@ int run_animesh(const AnimeshArgs& a) {
             << q.to_text() << "outputs in " << out.string()
             << "/: mesh.ply mesh.obj animesh.json regions.png mesh2d.png render.png "
                "min_angle_histogram.png q_histogram.png\n";
-  int status = 0;
-  if (unmeshed > 0) {
-    std::cerr << "scanmesh animesh: " << unmeshed
-              << " front edges could not be closed; the mesh has gaps (see animesh.json)\n";
-    status = 1;
-  }
-  // The mesher's guarantees, checked on what was written: a failure is reported like a gap.
-  if (!check.edge_manifold() || check.self_intersections > 0 || check.duplicate_faces > 0) {
-    std::cerr << "scanmesh animesh: the mesh fails its check (edge-manifold "
-              << (check.edge_manifold() ? "yes" : "no") << ", " << check.self_intersections
-              << " intersecting face pairs, " << check.duplicate_faces
-              << " duplicate faces; see animesh.json)\n";
-    status = 1;
-  }
-  return status;
+  // The mesher's guarantees, checked on what was written: open fronts or a failed check are
+  // reported in one line and by their own exit code (the outputs stay, animesh.json says where).
+  std::vector<std::string> defects;
+  if (unmeshed > 0) defects.push_back(std::to_string(unmeshed) + " front edges not closed (gaps)");
+  if (!check.edge_manifold()) defects.push_back("not edge-manifold");
+  if (check.self_intersections > 0)
+    defects.push_back(std::to_string(check.self_intersections) + " intersecting face pairs");
+  if (check.duplicate_faces > 0)
+    defects.push_back(std::to_string(check.duplicate_faces) + " duplicate faces");
+  if (defects.empty()) return kSuccess;
+  std::string what;
+  for (const std::string& d : defects) what += (what.empty() ? "" : ", ") + d;
+  std::cerr << "scanmesh: incomplete mesh: " << what << "; see " << (out / "animesh.json").string()
+            << "\n";
+  return kMeshIncomplete;
 }
 
 }  // namespace

@@ -107,6 +107,27 @@ TEST_F(CliAnimesh, LinesLeavingTheScannedAreaAreABadFileAndWriteNothing) {
   EXPECT_FALSE(fs::exists(out / "mesh.ply"));
 }
 
+// A front that cannot close (here: a step budget far too small for any region) still writes
+// every output, says so in one line and exits 9, not 0 and not 1 (a bug).
+TEST_F(CliAnimesh, OpenFrontsWriteEverythingAndExitNine) {
+  const fs::path settings = dir_ / "tiny_budget.yaml";
+  std::ofstream(settings) << "unit_mm: 24\nmax_front_steps: 3\n";
+  const fs::path out = dir_ / "open";
+  const auto r = run("animesh " + (dir_ / "head.smg").string() + " --lines " +
+                     (kConfigs / "head-lines.svg").string() + " --settings " + settings.string() +
+                     " --out " + out.string());
+  EXPECT_EQ(r.exit_code, 9) << r.output;
+  EXPECT_NE(r.output.find("scanmesh: incomplete mesh: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("front edges not closed"), std::string::npos) << r.output;
+  for (const char* f : {"mesh.ply", "animesh.json", "render.png"})
+    EXPECT_TRUE(fs::exists(out / f)) << f;
+  const auto report = nlohmann::json::parse(std::ifstream(out / "animesh.json"));
+  int open_edges = 0;
+  for (const auto& region : report["regions"])
+    open_edges += region["unmeshed_front_edges"].get<int>();
+  EXPECT_GT(open_edges, 0);
+}
+
 TEST_F(CliAnimesh, MalformedSettingsNameTheFileAndLine) {
   const fs::path settings = dir_ / "bad.yaml";
   std::ofstream(settings) << "unit_mm: 10\nregions:\n  - {name: nose, point: [256, 230], "

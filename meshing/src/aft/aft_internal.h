@@ -241,10 +241,10 @@ std::optional<std::vector<std::array<int, 3>>> delaunay_mesh_region(NodeStore& n
                                                                     RegionMeshStats& stats);
 
 //! Two-way sampled Hausdorff distance between the mesh and the scan surface, `samples`
-//! subdivisions per triangle edge for mesh -> surface. Surface -> mesh samples the surface over
-//! the meshed regions of `regions` (every second grid cell centre in phi and h inside a region
-//! that is not an opening), independently of the mesh, so a gap in it counts; without a graph,
-//! the surface over the mesh's own (phi, h) footprint.
+//! subdivisions per triangle edge. Surface -> mesh samples the surface over the mesh's own
+//! (phi, h) footprint at the same density and, given `regions`, also over the meshed regions
+//! (the centre of every second grid cell in phi and in h inside a region that is not an
+//! opening), independently of the mesh, so that a gap in it counts.
 struct TwoWayDistance {
   double mesh_to_surface_mm = 0, surface_to_mesh_mm = 0;
 };

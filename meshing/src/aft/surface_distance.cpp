@@ -135,9 +135,7 @@ TwoWayDistance sampled_hausdorff(const AnimationMesh& am, const ScanSurface& sur
         const Eigen::Vector3d x = w * P[f[0]] + u * P[f[1]] + v * P[f[2]];
         out.mesh_to_surface_mm =
             std::max(out.mesh_to_surface_mm, std::sqrt(surface_tree.squared_distance(point(x))));
-        if (regions) continue;
-        // No region graph: the surface over the triangle's footprint, the part of the surface
-        // this mesh covers (openings and unmeshed parts are not sampled).
+        // The surface over the triangle's footprint, at the mesh's own sample density.
         const Eigen::Vector2d pp = w * pa + u * pb + v * pc;
         if (const auto y = surface.position(pp.x(), pp.y()))
           out.surface_to_mesh_mm =
@@ -145,7 +143,7 @@ TwoWayDistance sampled_hausdorff(const AnimationMesh& am, const ScanSurface& sur
       }
   }
   if (!regions) return out;
-  // The surface over the meshed regions, whatever the mesh covers of it.
+  // And the surface over the meshed regions, whatever the mesh covers of it (a gap counts).
   const RegionLocator locate(*regions);
   for (int j = 0; j < surface.n_h(); j += 2)
     for (int i = 0; i < surface.n_phi(); i += 2) {

@@ -101,7 +101,9 @@ TEST(AnimationMesh, EdgeChainCheckCatchesAMissingFaceAndALostNode) {
     const auto has = [&](int v) { return std::find(t.begin(), t.end(), v) != t.end(); };
     return has(chain[0]) && has(chain[1]);
   };
-  T.erase(std::find_if(T.begin(), T.end(), beside));
+  const auto face = std::find_if(T.begin(), T.end(), beside);
+  ASSERT_NE(face, T.end());
+  T.erase(face);
   AnimationMesh lost_node = b.am;
   lost_node.segment_chains[ear_segment][1] = -1;
   // The gtest-spi macros run their statement in a local class: it sees statics only.

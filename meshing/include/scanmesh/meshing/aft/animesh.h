@@ -103,9 +103,9 @@ struct AnimationMeshQuality {
 };
 
 //! The quality report. The Hausdorff distances are sampled (`samples_per_triangle` subdivisions
-//! per edge, mesh -> surface); surface -> mesh samples the surface over the meshed regions of
-//! `regions` (every second grid cell), so a gap in the mesh counts, or without a graph the
-//! surface under the mesh's own triangles.
+//! per edge); surface -> mesh samples the surface under the mesh's own triangles and, given
+//! `regions`, also over its meshed regions (every second grid cell in phi and in h), so that a
+//! gap in the mesh counts.
 AnimationMeshQuality evaluate_quality(const AnimationMesh& am, const ScanSurface& surface,
                                       int samples_per_triangle = 6,
                                       const RegionGraph* regions = nullptr);
