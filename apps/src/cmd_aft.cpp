@@ -173,10 +173,13 @@ int run_animesh(const AnimeshArgs& a) {
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
   if (ec) throw IoError("cannot create output directory '" + out.string() + "': " + ec.message());
-  write_ply(out / "mesh.ply", am.mesh);
-  write_obj(out / "mesh.obj", am.mesh);
-  write_png(out / "regions.png", draw_regions(l.grid, *l.surface, l.graph, l.lines));
-  write_png(out / "mesh2d.png", draw_mesh_2d(l.grid, *l.surface, am));
+  // The outputs appear together or not at all: a write that fails half way (a full disk) must
+  // not leave this run's mesh next to an earlier run's report.
+  StagedFiles outputs;
+  write_ply(outputs.stage(out / "mesh.ply"), am.mesh);
+  write_obj(outputs.stage(out / "mesh.obj"), am.mesh);
+  write_png(outputs.stage(out / "regions.png"), draw_regions(l.grid, *l.surface, l.graph, l.lines));
+  write_png(outputs.stage(out / "mesh2d.png"), draw_mesh_2d(l.grid, *l.surface, am));
   Mesh colored = am.mesh;
   colored.colors.assign(colored.positions.size(), Rgb8{200, 200, 200});
   for (std::size_t t = 0; t < colored.triangles.size(); ++t)
@@ -190,9 +193,9 @@ int run_animesh(const AnimeshArgs& a) {
   RenderOptions ro;
   ro.draw_wireframe = true;
   ro.use_vertex_colors = true;  // region colours: the layout on the shaded surface
-  write_png(out / "render.png", render_mesh(colored, ro));
-  write_quality_histogram_png(out / "min_angle_histogram.png", check);
-  write_q_histogram_png(out / "q_histogram.png", q);
+  write_png(outputs.stage(out / "render.png"), render_mesh(colored, ro));
+  write_quality_histogram_png(outputs.stage(out / "min_angle_histogram.png"), check);
+  write_q_histogram_png(outputs.stage(out / "q_histogram.png"), q);
   int unmeshed = 0;
   for (const auto& s : am.region_stats) unmeshed += s.unmeshed_front_edges;
   nlohmann::json j;
@@ -263,7 +266,8 @@ int run_animesh(const AnimeshArgs& a) {
                 {"duplicate_faces", check.duplicate_faces},
                 {"self_intersections", check.self_intersections},
                 {"boundary_loops", check.topology.boundary_loops}};
-  write_file_atomically(out / "animesh.json", j.dump(2) + "\n");
+  write_file_atomically(outputs.stage(out / "animesh.json"), j.dump(2) + "\n");
+  outputs.commit();
   std::cout << l.graph.to_text() << am.mesh.positions.size() << " vertices (" << steiner
             << " Steiner points), " << am.mesh.triangles.size() << " triangles, meshed in "
             << t_mesh << " s\n"

@@ -120,6 +120,26 @@ void commit_temporary_file(const std::filesystem::path& temporary,
   fsync_directory(path.parent_path());
 }
 
+StagedFiles::~StagedFiles() {
+  if (committed_) return;
+  for (const auto& [temporary, final_path] : staged_) ::unlink(temporary.c_str());
+}
+
+std::filesystem::path StagedFiles::stage(const std::filesystem::path& final_path) {
+  staged_.emplace_back(temporary_path_beside(final_path), final_path);
+  return staged_.back().first;
+}
+
+void StagedFiles::commit() {
+  // The staged files are complete and flushed (their writers were atomic); only the renames
+  // are left, which do not need disk space.
+  for (const auto& [temporary, final_path] : staged_)
+    if (::rename(temporary.c_str(), final_path.c_str()) != 0)
+      throw IoError(os_error("rename onto", final_path, errno));
+  committed_ = true;
+  if (!staged_.empty()) fsync_directory(staged_.front().second.parent_path());
+}
+
 std::vector<std::uint8_t> read_file_bytes(const std::filesystem::path& path) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) throw IoError(os_error("open", path, errno));

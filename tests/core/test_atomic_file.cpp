@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <csignal>
 #include <stdexcept>
 #include <string>
@@ -29,6 +30,40 @@ TEST(AtomicFile, WriteReplacesContentAndLeavesNoTempFiles) {
   EXPECT_EQ(dir.entries(), std::vector<std::string>{"out.txt"});
   const std::vector<std::uint8_t> bytes = read_file_bytes(path);
   EXPECT_EQ(bytes.size(), 14u);
+}
+
+// A set of outputs appears together or not at all: a failure before commit() (here a thrown
+// error after the first file) leaves the earlier run's files as they were and no temporary
+// files; commit() puts every new file in place.
+TEST(StagedFiles, AllOrNothing) {
+  TempDir dir;
+  write_file_atomically(dir / "mesh.ply", std::string_view("old mesh"));
+  write_file_atomically(dir / "report.json", std::string_view("old report"));
+  try {
+    StagedFiles outputs;
+    write_file_atomically(outputs.stage(dir / "mesh.ply"), std::string_view("new mesh"));
+    throw IoError("disk full while writing the report");
+  } catch (const IoError&) {
+  }
+  EXPECT_EQ(read_text(dir / "mesh.ply"), "old mesh");
+  EXPECT_EQ(read_text(dir / "report.json"), "old report");
+  const auto sorted_entries = [&] {
+    std::vector<std::string> e = dir.entries();
+    std::sort(e.begin(), e.end());
+    return e;
+  };
+  EXPECT_EQ(sorted_entries(), (std::vector<std::string>{"mesh.ply", "report.json"}));
+  {
+    StagedFiles outputs;
+    write_file_atomically(outputs.stage(dir / "mesh.ply"), std::string_view("new mesh"));
+    write_file_atomically(outputs.stage(dir / "report.json"), std::string_view("new report"));
+    write_file_atomically(outputs.stage(dir / "render.png"), std::string_view("picture"));
+    EXPECT_EQ(read_text(dir / "mesh.ply"), "old mesh");  // nothing in place before commit
+    outputs.commit();
+  }
+  EXPECT_EQ(read_text(dir / "mesh.ply"), "new mesh");
+  EXPECT_EQ(read_text(dir / "report.json"), "new report");
+  EXPECT_EQ(sorted_entries(), (std::vector<std::string>{"mesh.ply", "render.png", "report.json"}));
 }
 
 TEST(AtomicFile, StreamingWriterIsWrittenOnlyWhenComplete) {

@@ -31,6 +31,28 @@ std::filesystem::path temporary_path_beside(const std::filesystem::path& path);
 void commit_temporary_file(const std::filesystem::path& temporary,
                            const std::filesystem::path& path);
 
+//! A set of output files that appear together or not at all (a command's outputs in one
+//! directory): each is written completely, by any writer, under a temporary name beside its
+//! final one (stage), and commit() renames them all into place. Destroyed without commit(), it
+//! removes what it staged, so a write that fails half way through the set (a full disk) leaves
+//! every final name as it was, not new files next to old ones.
+class StagedFiles {
+ public:
+  StagedFiles() = default;
+  StagedFiles(const StagedFiles&) = delete;
+  StagedFiles& operator=(const StagedFiles&) = delete;
+  ~StagedFiles();
+  //! The temporary path to write `final_path`'s content to (nothing is created).
+  std::filesystem::path stage(const std::filesystem::path& final_path);
+  //! Renames every staged file onto its final name, in staging order. Throws IoError naming
+  //! the file if a staged file is missing or a rename fails.
+  void commit();
+
+ private:
+  std::vector<std::pair<std::filesystem::path, std::filesystem::path>> staged_;  // temp, final
+  bool committed_ = false;
+};
+
 //! Reads a whole file. Throws IoError if it cannot be opened or read.
 std::vector<std::uint8_t> read_file_bytes(const std::filesystem::path& path);
 
