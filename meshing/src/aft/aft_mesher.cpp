@@ -252,7 +252,8 @@ class Mesher {
         deferred.push_back(e);
         continue;
       }
-      seen_ = Seen{};
+      seen_.param.clear();  // (the box is set by gather; the capacity is kept)
+      seen_.all_param = false;
       if (try_edge(e, relaxed)) {
         progress_ = true;
         relaxed = false;

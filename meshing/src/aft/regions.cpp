@@ -52,18 +52,24 @@ bool point_in_polygon_plain(const std::vector<Vector2d>& poly, const Vector2d& q
   return inside;
 }
 
-// Point in a winding-0 polygon with x unwrapped: tries the periodic copies of q.
-bool point_in_polygon(const std::vector<Vector2d>& poly, Vector2d q, double W) {
+// Point in a winding-0 polygon with x unwrapped whose x runs over [xmin, xmax]: tries the
+// periodic copies of q in that range.
+bool point_in_polygon_copies(const std::vector<Vector2d>& poly, Vector2d q, double W, double xmin,
+                             double xmax) {
   if (poly.size() < 3) return false;
+  q.x() -= W * std::floor((q.x() - xmin) / W);
+  for (; q.x() <= xmax; q.x() += W)
+    if (point_in_polygon_plain(poly, q)) return true;
+  return false;
+}
+
+bool point_in_polygon(const std::vector<Vector2d>& poly, Vector2d q, double W) {
   double xmin = 1e300, xmax = -1e300;
   for (const Vector2d& p : poly) {
     xmin = std::min(xmin, p.x());
     xmax = std::max(xmax, p.x());
   }
-  q.x() -= W * std::floor((q.x() - xmin) / W);
-  for (; q.x() <= xmax; q.x() += W)
-    if (point_in_polygon_plain(poly, q)) return true;
-  return false;
+  return point_in_polygon_copies(poly, q, W, xmin, xmax);
 }
 
 double wrap_x(double x, double W) { return x - W * std::floor(x / W); }
@@ -126,14 +132,10 @@ RegionLocator::Polygon RegionLocator::make(std::vector<Vector2d> pts) {
   return p;
 }
 
-// point_in_polygon with the box tested first.
+// point_in_polygon with the box kept and its h range tested first.
 bool RegionLocator::contains(const Polygon& poly, Vector2d q) {
-  if (poly.pts.size() < 3 || q.y() < poly.ymin || q.y() > poly.ymax) return false;
-  const double W = 2 * M_PI;
-  q.x() -= W * std::floor((q.x() - poly.xmin) / W);
-  for (; q.x() <= poly.xmax; q.x() += W)
-    if (point_in_polygon_plain(poly.pts, q)) return true;
-  return false;
+  if (q.y() < poly.ymin || q.y() > poly.ymax) return false;
+  return point_in_polygon_copies(poly.pts, q, 2 * M_PI, poly.xmin, poly.xmax);
 }
 
 std::optional<int> RegionLocator::region_at(const Vector2d& param) const {

@@ -19,6 +19,16 @@ class Regions : public ::testing::Test {
     return analyze_regions(parse_lines_svg("<svg>" + body + "</svg>", "t.svg"), surface_);
   }
   double px_area(double w, double h) const { return w * h * surface_.dphi() * surface_.dh(); }
+  //! The FileFormatError message analyze() gives for `body` ("" and a test failure if none).
+  std::string analysis_error(const std::string& body) {
+    try {
+      analyze(body);
+    } catch (const FileFormatError& e) {
+      return e.what();
+    }
+    ADD_FAILURE() << "no error for " << body;
+    return "";
+  }
   std::vector<Region> meshed(const RegionGraph& g) const {
     std::vector<Region> r;
     for (const Region& x : g.regions)
@@ -124,30 +134,20 @@ TEST_F(Regions, BandBetweenTwoRoundLinesNeedsALineAcross) {
   const RegionGraph cut = analyze(loops + "<path id='cut' d='M 100 50 L 100 300'/>");
   ASSERT_EQ(meshed(cut).size(), 1u);
   EXPECT_NEAR(meshed(cut)[0].area, px_area(512, 250), 1e-6);
-  try {
-    analyze(loops);
-    FAIL() << "no error";
-  } catch (const FileFormatError& e) {
-    const std::string what = e.what();
-    EXPECT_NE(what.find("t.svg"), std::string::npos) << what;
-    EXPECT_NE(what.find("line 'low'"), std::string::npos) << what;
-    EXPECT_NE(what.find("line 'high'"), std::string::npos) << what;
-    EXPECT_NE(what.find("all the way round"), std::string::npos) << what;
-  }
+  const std::string band = analysis_error(loops);
+  EXPECT_NE(band.find("t.svg"), std::string::npos) << band;
+  EXPECT_NE(band.find("line 'low'"), std::string::npos) << band;
+  EXPECT_NE(band.find("line 'high'"), std::string::npos) << band;
+  EXPECT_NE(band.find("all the way round"), std::string::npos) << band;
   // A line hanging off a round line is not named as going round; two open lines that go
   // round together are named together.
-  try {
-    analyze(
-        "<path id='stub' d='M 100 50 L 100 80'/>"
-        "<path id='west' d='M 0 300 L 256 300'/><path id='east' d='M 256 300 L 512 300'/>" +
-        std::string("<polygon id='low' points='0,50 128,50 256,50 384,50'/>"));
-    FAIL() << "no error";
-  } catch (const FileFormatError& e) {
-    const std::string what = e.what();
-    EXPECT_EQ(what.find("'stub'"), std::string::npos) << what;
-    EXPECT_NE(what.find("line 'low'"), std::string::npos) << what;
-    EXPECT_NE(what.find("lines 'west' and 'east' (together)"), std::string::npos) << what;
-  }
+  const std::string together = analysis_error(
+      "<path id='stub' d='M 100 50 L 100 80'/>"
+      "<path id='west' d='M 0 300 L 256 300'/><path id='east' d='M 256 300 L 512 300'/>"
+      "<polygon id='low' points='0,50 128,50 256,50 384,50'/>");
+  EXPECT_NE(together.find("line 'low'"), std::string::npos) << together;
+  EXPECT_EQ(together.find("'stub'"), std::string::npos) << together;
+  EXPECT_NE(together.find("lines 'west' and 'east' (together)"), std::string::npos) << together;
   // One round line alone bounds nothing but the caps: no error, no region.
   EXPECT_TRUE(meshed(analyze("<polygon id='low' points='0,50 128,50 256,50 384,50'/>")).empty());
 }
