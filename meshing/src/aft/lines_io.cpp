@@ -21,6 +21,8 @@ const char* to_string(LineKind kind) {
       return "opening";
     case LineKind::Seam:
       return "seam";
+    case LineKind::DataBorder:
+      return "data-border";
     default:
       return "line";
   }

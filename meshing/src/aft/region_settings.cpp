@@ -123,6 +123,10 @@ RegionSettings parse_region_settings(std::string_view source, const std::string&
           throw FileFormatError(file, key + " must be true or false");
         (key == "valence_flips" ? s.valence_flips : s.parallel_postprocessing) =
             v.Scalar() == "true";
+      } else if (key == "data_border") {
+        s.data_border = keyword<DataBorderMode>(
+            v, file, key,
+            {{"auto", DataBorderMode::Auto}, {"on", DataBorderMode::On}, {"off", DataBorderMode::Off}});
       } else if (key == "seed") {
         s.seed = v.as<std::uint64_t>();
       } else if (key == "regions") {

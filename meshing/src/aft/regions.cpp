@@ -498,9 +498,14 @@ RegionGraph analyze_regions(const LineSet& set, const ScanSurface& surface, doub
     if (cy.winding != 0 || cy.area <= 1e-12) continue;
     Region r;
     r.outer = static_cast<int>(c);
-    r.opening = true;
-    for (const HalfEdgeRef& e : cy.edges)
-      if (set.lines[g.segments[e.segment].line].kind != LineKind::Opening) r.opening = false;
+    // An opening cut by the data border stays an opening: the border only closes it.
+    bool any_opening = false, only_openings = true;
+    for (const HalfEdgeRef& e : cy.edges) {
+      const LineKind kind = set.lines[g.segments[e.segment].line].kind;
+      any_opening |= kind == LineKind::Opening;
+      only_openings &= kind == LineKind::Opening || kind == LineKind::DataBorder;
+    }
+    r.opening = any_opening && only_openings;
     region_of_cycle[c] = static_cast<int>(g.regions.size());
     g.regions.push_back(r);
   }

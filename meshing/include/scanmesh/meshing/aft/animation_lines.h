@@ -20,7 +20,9 @@
 
 namespace scanmesh::aft {
 
-enum class LineKind { Normal, Opening, Seam };
+//! DataBorder: the edge of a partial scan's data, traced by trace_data_border (data_border.h),
+//! never read from a file; a region border like Normal, with no region outside it.
+enum class LineKind { Normal, Opening, Seam, DataBorder };
 
 const char* to_string(LineKind kind);
 

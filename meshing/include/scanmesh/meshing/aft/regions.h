@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "scanmesh/meshing/aft/animation_lines.h"
+#include "scanmesh/meshing/aft/data_border.h"
 #include "scanmesh/reconstruction/scan_surface.h"
 
 namespace scanmesh::aft {
@@ -137,6 +138,9 @@ struct RegionSettings {
   //! serially, as the fallback does; docs/animation-meshes.md).
   bool parallel_postprocessing = true;
   std::uint64_t seed = 1;
+  //! When the edge of the scan's data becomes a region border (data_border.h); nullopt: not
+  //! set here (the CLI's --data-border, else auto).
+  std::optional<DataBorderMode> data_border;
   std::vector<RegionRule> regions;
 
   //! The same settings with every unit size (the default and each rule's) times `factor`, e.g.
