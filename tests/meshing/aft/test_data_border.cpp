@@ -276,6 +276,71 @@ TEST(DataBorder, AnimeshOnAQuarterTurnCoversTheDataWithAValidMesh) {
       rep.topology.boundary_loops, rep.edge_manifold());
 }
 
+// A round patch of data on a cylinder (cells valid inside an ellipse of 120 x 240 cells): the
+// border must follow the curve without the cells' staircase and without sharp corners.
+RangeGrid elliptic_patch() {
+  RangeGrid g = test::cylinder_grid(100.0, 0.0, 512, 400, 0.5);
+  for (int j = 0; j < g.n_h(); ++j)
+    for (int i = 0; i < g.n_phi(); ++i)
+      if (std::pow((i - 256) / 60.0, 2) + std::pow((j - 200) / 120.0, 2) >= 1) g.invalidate(i, j);
+  return g;
+}
+
+TEST(DataBorder, RoundPatchGetsOneSmoothBorderWithoutStairs) {
+  const RangeGrid grid = elliptic_patch();
+  const ScanSurface surface(grid);
+  const std::vector<AnimationLine> border = trace_data_border(surface);
+  ASSERT_EQ(border.size(), 1u);
+  const AnimationLine& b = border[0];
+  EXPECT_TRUE(b.closed);  // no corner: one closed line
+  EXPECT_NO_THROW(validate_lines(LineSet{"border", border}, surface));
+  const std::size_t n = b.pixels.size();
+  double worst_turn = 0, shortest = 1e9, area_px = 0, closest = 1e9, farthest = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    const Eigen::Vector2d a = b.pixels[(k + n - 1) % n], p = b.pixels[k], c = b.pixels[(k + 1) % n];
+    const Eigen::Vector2d u = p - a, v = c - p;
+    worst_turn = std::max(worst_turn, std::atan2(std::fabs(u.x() * v.y() - u.y() * v.x()), u.dot(v)));
+    shortest = std::min(shortest, v.norm());
+    area_px += 0.5 * (p.x() * c.y() - c.x() * p.y());
+    // Cell (i, j) is pixel (i + 0.5, j + 0.5): distance to the ellipse in cells, roughly.
+    const double e = std::hypot((p.x() - 256.5) / 60.0, (p.y() - 200.5) / 120.0);
+    closest = std::min(closest, (1 - e) * 60);
+    farthest = std::max(farthest, (1 - e) * 60);
+  }
+  // The staircase of single cells would turn by 90 deg at every step; the Douglas-Peucker
+  // chords of 0.6 px on the ellipse's tight ends (radius of curvature 30 px) turn by ~25-35.
+  EXPECT_LT(worst_turn, 45 * M_PI / 180) << worst_turn * 180 / M_PI;
+  EXPECT_GT(shortest, 1.0);
+  EXPECT_LT(n, 120u);  // the ellipse is ~1,200 cell edges round
+  // The defined patches fill the ellipse less a ~1 cell rim; the margin takes 1.5 more.
+  const double ellipse_px = M_PI * 60 * 120;
+  EXPECT_GT(area_px, 0.93 * ellipse_px);
+  EXPECT_LT(area_px, 0.99 * ellipse_px);
+  std::printf(
+      "round patch: %zu border vertices, sharpest turn %.1f deg, shortest side %.2f px, area "
+      "%.1f %% of the ellipse, %.2f..%.2f cells inside it (at the vertices)\n",
+      n, worst_turn * 180 / M_PI, shortest, 100 * area_px / ellipse_px, closest, farthest);
+  // No lines: one region, meshed with every front closed and one boundary loop.
+  const DataBorderResult r = with_data_border(LineSet{}, surface, DataBorderMode::Auto);
+  RegionGraph g = regions_of(r.lines, surface);
+  ASSERT_EQ(meshed_regions(g), 1);
+  RegionSettings s;
+  s.default_unit_mm = 5;
+  apply_region_settings(g, s, surface);
+  const AnimationMesh am = build_animation_mesh(g, r.lines, surface, s);
+  EXPECT_EQ(am.region_stats.at(0).unmeshed_front_edges, 0);
+  const MeshCheckReport rep = check_mesh(am.mesh);
+  EXPECT_TRUE(rep.edge_manifold());
+  EXPECT_EQ(rep.self_intersections, 0u);
+  EXPECT_EQ(rep.topology.boundary_loops, 1u);
+  const AnimationMeshQuality q = evaluate_quality(am, surface, 2, &g);
+  EXPECT_GE(q.min_angle_deg, 20.0) << q.to_text();
+  EXPECT_LT(q.max_vertex_offset_mm, 1e-6);
+  EXPECT_LT(uncovered_cells(surface, am), 2.5);
+  std::printf("round patch, no lines: %zu triangles, min angle %.2f deg, %.2f %% >= 30 deg\n",
+              am.mesh.triangles.size(), q.min_angle_deg, 100 * q.fraction_min_angle_ge_30);
+}
+
 TEST(DataBorder, AutoOnTheFullHeadGivesTodaysMesh) {
   const PartialHead& head = partial_head();
   const test::SampleHead& full = head.full;
