@@ -16,6 +16,7 @@
 #include "scanmesh/core/mesh_io.h"
 #include "scanmesh/core/render.h"
 #include "scanmesh/meshing/aft/animesh.h"
+#include "scanmesh/meshing/aft/data_border.h"
 #include "scanmesh/meshing/mesh_check.h"
 #include "scanmesh/reconstruction/curvature_maps.h"
 #include "scanmesh/reconstruction/scan_surface.h"
@@ -26,12 +27,13 @@ namespace {
 
 using Eigen::Vector2d;
 
+// data_border: "" = not given (the settings file's data_border, else auto).
 struct RegionsArgs {
-  std::string grid, lines, settings, png;
+  std::string grid, lines, settings, png, data_border;
 };
 
 struct AnimeshArgs {
-  std::string grid, lines, settings, out;
+  std::string grid, lines, settings, out, data_border;
   std::optional<std::uint64_t> seed;
   std::string strategy;
 };
@@ -80,9 +82,10 @@ Image8 draw_regions(const RangeGrid& grid, const ScanSurface& surface, const aft
     }
   for (const auto& seg : g.segments) {
     const auto kind = lines.lines[seg.line].kind;
-    const Rgb8 c = kind == aft::LineKind::Opening ? Rgb8{255, 255, 0}
-                   : kind == aft::LineKind::Seam  ? Rgb8{0, 255, 255}
-                                                  : Rgb8{255, 255, 255};
+    const Rgb8 c = kind == aft::LineKind::Opening      ? Rgb8{255, 255, 0}
+                   : kind == aft::LineKind::Seam       ? Rgb8{0, 255, 255}
+                   : kind == aft::LineKind::DataBorder ? Rgb8{255, 140, 0}
+                                                       : Rgb8{255, 255, 255};
     for (std::size_t k = 0; k + 1 < seg.pts.size(); ++k)
       draw_segment(im, aft::param_to_pixel(surface, seg.pts[k]),
                    aft::param_to_pixel(surface, seg.pts[k + 1]), c);
@@ -118,22 +121,55 @@ Image8 draw_mesh_2d(const RangeGrid& grid, const ScanSurface& surface,
 struct Loaded {
   RangeGrid grid;
   std::unique_ptr<ScanSurface> surface;
-  aft::LineSet lines;
+  aft::LineSet lines;  //!< the user's lines clipped to the data border, then the border
   aft::RegionGraph graph;
   aft::RegionSettings settings;
+  aft::DataBorderMode border_mode = aft::DataBorderMode::Auto;
+  aft::DataBorderResult border;  //!< its counts (border.lines is moved into `lines`)
 };
 
+// The option wins over the settings file's data_border, which wins over auto.
+aft::DataBorderMode border_mode(const std::string& option, const aft::RegionSettings& settings) {
+  if (!option.empty()) return aft::parse_data_border_mode(option);
+  return settings.data_border.value_or(aft::DataBorderMode::Auto);
+}
+
+// No --lines: no user lines (the data border alone can make a region of a partial scan).
+aft::LineSet user_lines(const std::string& lines_path) {
+  if (lines_path.empty()) return {};
+  return aft::read_lines(lines_path);
+}
+
 Loaded load(const std::string& grid_path, const std::string& lines_path,
-            const std::string& settings_path) {
+            const std::string& settings_path, const std::string& data_border) {
   Loaded l;
   l.grid = read_grid(grid_path);
   l.surface = std::make_unique<ScanSurface>(l.grid);
-  l.lines = aft::read_lines(lines_path);
+  if (!settings_path.empty()) l.settings = aft::read_region_settings(settings_path);
+  l.border_mode = border_mode(data_border, l.settings);
+  l.border = aft::with_data_border(user_lines(lines_path), *l.surface, l.border_mode);
+  l.lines = std::move(l.border.lines);
   aft::validate_lines(l.lines, *l.surface);
   l.graph = aft::analyze_regions(l.lines, *l.surface);
-  if (!settings_path.empty()) l.settings = aft::read_region_settings(settings_path);
   aft::apply_region_settings(l.graph, l.settings, *l.surface);
   return l;
+}
+
+// One line, only when a border was added (a full scan's output stays as it was).
+std::string border_text(const Loaded& l) {
+  if (!l.border.border_on) return "";
+  return "data border (" + std::string(aft::to_string(l.border_mode)) +
+         "): " + std::to_string(l.border.border_lines) + " border lines, " +
+         std::to_string(l.border.clipped_lines) + " lines clipped, " +
+         std::to_string(l.border.dropped_lines) + " lines outside the data dropped\n";
+}
+
+nlohmann::json border_json(const Loaded& l) {
+  return {{"mode", aft::to_string(l.border_mode)},
+          {"on", l.border.border_on},
+          {"border_lines", l.border.border_lines},
+          {"clipped_lines", l.border.clipped_lines},
+          {"dropped_lines", l.border.dropped_lines}};
 }
 
 // The radius ratio q = 2 r_in / R_circ in bins of 0.1; from 0.5 on drawn as good (q = 0.5 is
@@ -147,8 +183,8 @@ void write_q_histogram_png(const std::filesystem::path& path, const aft::Animati
 }
 
 int run_regions(const RegionsArgs& a) {
-  const Loaded l = load(a.grid, a.lines, a.settings);
-  std::cout << l.graph.to_text();
+  const Loaded l = load(a.grid, a.lines, a.settings, a.data_border);
+  std::cout << border_text(l) << l.graph.to_text();
   if (!a.png.empty()) {
     write_png(a.png, draw_regions(l.grid, *l.surface, l.graph, l.lines));
     std::cout << "region layout: " << a.png << "\n";
@@ -158,7 +194,7 @@ int run_regions(const RegionsArgs& a) {
 
 int run_animesh(const AnimeshArgs& a) {
   Stopwatch total;
-  Loaded l = load(a.grid, a.lines, a.settings);
+  Loaded l = load(a.grid, a.lines, a.settings, a.data_border);
   if (a.seed) l.settings.seed = *a.seed;
   if (a.strategy == "random") l.settings.strategy = aft::EdgeStrategy::Random;
   if (a.strategy == "shortest") l.settings.strategy = aft::EdgeStrategy::Shortest;
@@ -260,6 +296,7 @@ int run_animesh(const AnimeshArgs& a) {
                        {"rejected_circumcentres", s.rejected_circumcentres},
                        {"unmeshed_front_edges", s.unmeshed_front_edges}});
   j["regions"] = regions;
+  j["data_border"] = border_json(l);
   j["line_edges"] = am.line_edges;
   j["seams"] = am.seams;
   j["check"] = {{"edge_manifold", check.edge_manifold()},
@@ -268,7 +305,7 @@ int run_animesh(const AnimeshArgs& a) {
                 {"boundary_loops", check.topology.boundary_loops}};
   write_file_atomically(outputs.stage(out / "animesh.json"), j.dump(2) + "\n");
   outputs.commit();
-  std::cout << l.graph.to_text() << am.mesh.positions.size() << " vertices (" << steiner
+  std::cout << border_text(l) << l.graph.to_text() << am.mesh.positions.size() << " vertices (" << steiner
             << " Steiner points), " << am.mesh.triangles.size() << " triangles, meshed in "
             << t_mesh << " s\n"
             << q.to_text() << "outputs in " << out.string()
@@ -291,25 +328,32 @@ int run_animesh(const AnimeshArgs& a) {
   return kMeshIncomplete;
 }
 
+void add_data_border_option(CLI::App* command, std::string& value) {
+  command
+      ->add_option("--data-border", value,
+                   "Edge of the scan's data as a region border: auto (when the data miss part "
+                   "of the turn) | on | off (default: the settings' data_border, else auto)")
+      ->check(CLI::IsMember({"auto", "on", "off"}));
+}
+
 }  // namespace
 
 void register_aft_commands(CLI::App& app, CommandList& commands) {
   auto ra = std::make_shared<RegionsArgs>();
   CLI::App* r = app.add_subcommand("regions", "Region analysis of animation lines over a scan");
   r->add_option("grid", ra->grid, "Range grid (.smg)")->required()->check(CLI::ExistingFile);
-  r->add_option("--lines", ra->lines, "Animation lines (.svg or .json)")
-      ->required()
+  r->add_option("--lines", ra->lines, "Animation lines (.svg or .json); none: the data border only")
       ->check(CLI::ExistingFile);
   r->add_option("--settings", ra->settings, "Region settings (.yaml/.json)")
       ->check(CLI::ExistingFile);
   r->add_option("--png", ra->png, "Draw the regions over the texture into this PNG");
+  add_data_border_option(r, ra->data_border);
   commands.push_back({r, [ra] { return run_regions(*ra); }});
 
   auto aa = std::make_shared<AnimeshArgs>();
   CLI::App* m = app.add_subcommand("animesh", "Animation mesh: regions meshed by advancing fronts");
   m->add_option("grid", aa->grid, "Range grid (.smg)")->required()->check(CLI::ExistingFile);
-  m->add_option("--lines", aa->lines, "Animation lines (.svg or .json)")
-      ->required()
+  m->add_option("--lines", aa->lines, "Animation lines (.svg or .json); none: the data border only")
       ->check(CLI::ExistingFile);
   m->add_option("--settings", aa->settings, "Region settings (.yaml/.json)")
       ->check(CLI::ExistingFile);
@@ -317,6 +361,7 @@ void register_aft_commands(CLI::App& app, CommandList& commands) {
   m->add_option("--seed", aa->seed, "Seed of the random edge order");
   m->add_option("--strategy", aa->strategy, "Front edge order: random | shortest | longest")
       ->check(CLI::IsMember({"random", "shortest", "longest"}));
+  add_data_border_option(m, aa->data_border);
   commands.push_back({m, [aa] { return run_animesh(*aa); }});
 }
 
