@@ -305,9 +305,9 @@ int run_animesh(const AnimeshArgs& a) {
                 {"boundary_loops", check.topology.boundary_loops}};
   write_file_atomically(outputs.stage(out / "animesh.json"), j.dump(2) + "\n");
   outputs.commit();
-  std::cout << border_text(l) << l.graph.to_text() << am.mesh.positions.size() << " vertices (" << steiner
-            << " Steiner points), " << am.mesh.triangles.size() << " triangles, meshed in "
-            << t_mesh << " s\n"
+  std::cout << border_text(l) << l.graph.to_text() << am.mesh.positions.size() << " vertices ("
+            << steiner << " Steiner points), " << am.mesh.triangles.size()
+            << " triangles, meshed in " << t_mesh << " s\n"
             << q.to_text() << "outputs in " << out.string()
             << "/: mesh.ply mesh.obj animesh.json regions.png mesh2d.png render.png "
                "min_angle_histogram.png q_histogram.png\n";

@@ -77,8 +77,7 @@ TEST_F(CliPartialScan, AnimeshWithALineThatDoesNotCloseFindsTheRegionsOfTheBorde
   const fs::path lines = dir_ / "across.json";
   write_text(lines, R"({"lines": [{"id": "across", "points": [[150, 235], [360, 235]]}]})");
   const fs::path out = dir_ / "anim";
-  const auto r = run("animesh " + grid() + " --lines " + lines.string() + " --out " +
-                     out.string());
+  const auto r = run("animesh " + grid() + " --lines " + lines.string() + " --out " + out.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("data border (auto)"), std::string::npos) << r.output;
   const nlohmann::json j = read_json(out / "animesh.json");
@@ -106,8 +105,8 @@ TEST_F(CliPartialScan, RegionsWithoutLinesIsTheWholePatchAndTheSettingsCanTurnTh
   EXPECT_NE(off.output.find(" 0 regions"), std::string::npos) << off.output;
   EXPECT_EQ(off.output.find("data border"), std::string::npos) << off.output;
   // The option wins over the file.
-  const auto on = run("regions " + grid() + " --settings " + settings.string() +
-                      " --data-border on");
+  const auto on =
+      run("regions " + grid() + " --settings " + settings.string() + " --data-border on");
   EXPECT_NE(on.output.find(" 1 regions"), std::string::npos) << on.output;
 }
 

@@ -45,16 +45,16 @@ class UndefinedCounts {
     for (int j = 0; j < m.rows; ++j)
       for (int i = 0; i < w3; ++i)
         sum_[(j + 1) * (w3 + 1) + i + 1] = sum_[j * (w3 + 1) + i + 1] +
-                                           sum_[(j + 1) * (w3 + 1) + i] -
-                                           sum_[j * (w3 + 1) + i] + !m.at(i, j);
+                                           sum_[(j + 1) * (w3 + 1) + i] - sum_[j * (w3 + 1) + i] +
+                                           !m.at(i, j);
   }
   // Undefined patches in columns [i0, i1] x rows [j0, j1] (i unwrapped within one turn).
   int count(int i0, int i1, int j0, int j1) const {
     if (j0 < 0 || j1 >= m_.rows) return 1;
     const int w3 = 3 * m_.width;
     const int a = i0 + m_.width, b = i1 + m_.width + 1;
-    return sum_[(j1 + 1) * (w3 + 1) + b] - sum_[j0 * (w3 + 1) + b] -
-           sum_[(j1 + 1) * (w3 + 1) + a] + sum_[j0 * (w3 + 1) + a];
+    return sum_[(j1 + 1) * (w3 + 1) + b] - sum_[j0 * (w3 + 1) + b] - sum_[(j1 + 1) * (w3 + 1) + a] +
+           sum_[j0 * (w3 + 1) + a];
   }
 
  private:
@@ -229,8 +229,7 @@ void douglas_peucker(const std::vector<Vector2d>& p, std::size_t i0, std::size_t
 
 // A closed contour simplified; `turns` != 0: the contour goes round the axis and its closing
 // piece runs one turn on.
-std::vector<Vector2d> simplify_closed(std::vector<Vector2d> loop, int turns, double W,
-                                      double tol) {
+std::vector<Vector2d> simplify_closed(std::vector<Vector2d> loop, int turns, double W, double tol) {
   Vector2d closing = loop.front();
   closing.x() += turns * W;
   std::size_t far = 0;
@@ -338,8 +337,7 @@ DataBorderMode parse_data_border_mode(std::string_view name) {
   if (name == "auto") return DataBorderMode::Auto;
   if (name == "on") return DataBorderMode::On;
   if (name == "off") return DataBorderMode::Off;
-  throw InvalidInputError("data border must be auto, on or off, not \"" + std::string(name) +
-                          "\"");
+  throw InvalidInputError("data border must be auto, on or off, not \"" + std::string(name) + "\"");
 }
 
 const char* to_string(DataBorderMode mode) {
@@ -395,8 +393,8 @@ std::vector<AnimationLine> trace_data_border(const ScanSurface& surface,
     for (std::size_t c = 0; c < corners.size(); ++c) {
       AnimationLine part = line;
       part.id += "." + std::to_string(c + 1);
-      part.pixels = corner_to_corner(t, corners[c], corners[(c + 1) % corners.size()],
-                                     surface.n_phi());
+      part.pixels =
+          corner_to_corner(t, corners[c], corners[(c + 1) % corners.size()], surface.n_phi());
       lines.push_back(std::move(part));
     }
   }
@@ -483,8 +481,7 @@ std::optional<std::vector<AnimationLine>> clip_line(const AnimationLine& line,
     for (double t : ts) cuts.push_back(k + t);
   }
   std::sort(cuts.begin(), cuts.end());
-  cuts.erase(std::unique(cuts.begin(), cuts.end(),
-                         [](double a, double b) { return b - a < 1e-9; }),
+  cuts.erase(std::unique(cuts.begin(), cuts.end(), [](double a, double b) { return b - a < 1e-9; }),
              cuts.end());
   if (cuts.empty()) return std::nullopt;
   const double n = static_cast<double>(pieces.size());

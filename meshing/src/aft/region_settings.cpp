@@ -124,9 +124,10 @@ RegionSettings parse_region_settings(std::string_view source, const std::string&
         (key == "valence_flips" ? s.valence_flips : s.parallel_postprocessing) =
             v.Scalar() == "true";
       } else if (key == "data_border") {
-        s.data_border = keyword<DataBorderMode>(
-            v, file, key,
-            {{"auto", DataBorderMode::Auto}, {"on", DataBorderMode::On}, {"off", DataBorderMode::Off}});
+        s.data_border = keyword<DataBorderMode>(v, file, key,
+                                                {{"auto", DataBorderMode::Auto},
+                                                 {"on", DataBorderMode::On},
+                                                 {"off", DataBorderMode::Off}});
       } else if (key == "seed") {
         s.seed = v.as<std::uint64_t>();
       } else if (key == "regions") {

@@ -59,9 +59,9 @@ int meshed_regions(const RegionGraph& g) {
 double area(const Mesh& m) {
   double a = 0;
   for (const auto& t : m.triangles)
-    a += 0.5 * (m.positions[t[1]] - m.positions[t[0]])
-                   .cross(m.positions[t[2]] - m.positions[t[0]])
-                   .norm();
+    a +=
+        0.5 *
+        (m.positions[t[1]] - m.positions[t[0]]).cross(m.positions[t[2]] - m.positions[t[0]]).norm();
   return a;
 }
 
@@ -299,7 +299,8 @@ TEST(DataBorder, RoundPatchGetsOneSmoothBorderWithoutStairs) {
   for (std::size_t k = 0; k < n; ++k) {
     const Eigen::Vector2d a = b.pixels[(k + n - 1) % n], p = b.pixels[k], c = b.pixels[(k + 1) % n];
     const Eigen::Vector2d u = p - a, v = c - p;
-    worst_turn = std::max(worst_turn, std::atan2(std::fabs(u.x() * v.y() - u.y() * v.x()), u.dot(v)));
+    worst_turn =
+        std::max(worst_turn, std::atan2(std::fabs(u.x() * v.y() - u.y() * v.x()), u.dot(v)));
     shortest = std::min(shortest, v.norm());
     area_px += 0.5 * (p.x() * c.y() - c.x() * p.y());
     // Cell (i, j) is pixel (i + 0.5, j + 0.5): distance to the ellipse in cells, roughly.

@@ -54,11 +54,11 @@ LineSet clip_lines_to_border(const LineSet& lines, const std::vector<AnimationLi
                              const ScanSurface& surface);
 
 struct DataBorderResult {
-  LineSet lines;                //!< clipped user lines, then the border lines
-  bool border_on = false;       //!< whether the mode (auto resolved) added a border
-  int border_lines = 0;         //!< border lines added
-  int clipped_lines = 0;        //!< user lines that were cut at the border
-  int dropped_lines = 0;        //!< user lines wholly outside the border
+  LineSet lines;           //!< clipped user lines, then the border lines
+  bool border_on = false;  //!< whether the mode (auto resolved) added a border
+  int border_lines = 0;    //!< border lines added
+  int clipped_lines = 0;   //!< user lines that were cut at the border
+  int dropped_lines = 0;   //!< user lines wholly outside the border
 };
 
 //! The lines the region analysis gets: `lines` unchanged when the mode resolves to off, else
