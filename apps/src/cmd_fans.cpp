@@ -11,14 +11,14 @@
 #include "scanmesh/core/image.h"
 #include "scanmesh/core/mesh_io.h"
 #include "scanmesh/meshing/fans/fans.h"
-#include "scanmesh/meshing/fans/point_cloud_io.h"
+#include "scanmesh/core/point_cloud_io.h"
 #include "scanmesh/meshing/mesh_check.h"
 
 namespace scanmesh::cli {
 
 int run_fans(const FansArgs& args) {
   args.options.validate();
-  const std::vector<Eigen::Vector3d> cloud = read_point_cloud(args.cloud);
+  const std::vector<Eigen::Vector3d> cloud = read_point_cloud(args.cloud).positions;
   FanOptions options = args.options;
   // A grid's cells come from a turntable scan: their outside is away from the axis.
   if (std::filesystem::path(args.cloud).extension() == ".smg") options.orient_away_from_axis = true;
@@ -53,7 +53,7 @@ int run_fans(const FansArgs& args) {
 }
 
 int run_check(const CheckArgs& args) {
-  const Mesh mesh = read_ply(args.mesh);
+  const Mesh mesh = read_mesh(args.mesh);
   const MeshCheckReport report = check_mesh(mesh, {.self_intersections = !args.skip_intersections});
   std::cout << args.mesh << "\n" << report.to_text();
   if (!args.histogram_png.empty()) write_quality_histogram_png(args.histogram_png, report);

@@ -33,7 +33,7 @@ int run_grid_mesh(const GridMeshArgs& args) {
 }
 
 int run_render(const RenderArgs& args) {
-  const Mesh mesh = read_ply(args.mesh);
+  const Mesh mesh = read_mesh(args.mesh);
   write_png(args.out, render_mesh(mesh, {.width = args.size,
                                          .height = args.size,
                                          .azimuth_deg = args.azimuth_deg,

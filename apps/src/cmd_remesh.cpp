@@ -49,7 +49,7 @@ struct RemeshArgs {
 int run_remesh(const RemeshArgs& a) {
   using namespace remeshing;
   PrepareStats ps;
-  const Mesh raw = read_ply(a.mesh);
+  const Mesh raw = read_mesh(a.mesh);
   double tip_reach = 0;
   if (a.remove_spikes) {
     // The mean edge of a uniform output with the requested count (F ~ 2 V faces).
@@ -180,7 +180,7 @@ void register_remesh_commands(CLI::App& app, CommandList& commands) {
   auto* c = app.add_subcommand("remesh",
                                "Seed 001 adaptive remeshing to a vertex count, keeping seams, "
                                "boundaries and feature lines");
-  c->add_option("mesh", args->mesh, "Input mesh (.ply, face labels kept)")
+  c->add_option("mesh", args->mesh, "Input mesh (.ply with face labels kept, .off, .obj, .stl)")
       ->required()
       ->check(CLI::ExistingFile);
   c->add_option("--vertices", args->vertices, "Target vertex count")->required();

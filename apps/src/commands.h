@@ -179,6 +179,7 @@ int run_sim_scan(const SimScanRequest& request);
 // --- check-calibration: re-measure known spheres: apps/src/cmd_measure.cpp ---
 namespace scanmesh::cli {
 void register_measure_commands(CLI::App& app, CommandList& commands);
+void register_import_commands(CLI::App& app, CommandList& commands);
 }  // namespace scanmesh::cli
 
 // --- animation meshes (seed 000): apps/src/cmd_aft.cpp ---

@@ -87,7 +87,7 @@ int main(int argc, char** argv) {
 
   RenderArgs render;
   auto* render_cmd = app.add_subcommand("render", "Render a PLY mesh to a shaded PNG");
-  render_cmd->add_option("mesh", render.mesh, "Mesh file (.ply)")->required();
+  render_cmd->add_option("mesh", render.mesh, "Mesh file (.ply, .off, .obj, .stl)")->required();
   render_cmd->add_option("-o,--out", render.out, "Output PNG")->required();
   render_cmd->add_option("--size", render.size, "Image size in pixels")
       ->capture_default_str()
@@ -150,7 +150,7 @@ int main(int argc, char** argv) {
   CheckArgs check;
   auto* check_cmd = app.add_subcommand(
       "check", "Mesh checker: duplicates, non-manifold edges/vertices, self-intersections, holes");
-  check_cmd->add_option("mesh", check.mesh, "Mesh (.ply)")->required();
+  check_cmd->add_option("mesh", check.mesh, "Mesh (.ply, .off, .obj, .stl)")->required();
   check_cmd->add_option("--histogram", check.histogram_png, "Min-angle histogram (PNG)");
   check_cmd->add_flag("--no-intersections", check.skip_intersections,
                       "Skip the self-intersection test");
@@ -196,6 +196,7 @@ int main(int argc, char** argv) {
   register_aft_commands(app, commands);
   register_remesh_commands(app, commands);
   register_measure_commands(app, commands);
+  register_import_commands(app, commands);
 
   try {
     app.parse(argc, argv);
