@@ -424,13 +424,35 @@ std::optional<RayHit> cast(const std::array<Eigen::Vector3d, 3>& q, double phi, 
   return RayHit{t, u, v, std::abs(n.dot(d)) / n.norm()};
 }
 
+// The mesh without vertices no triangle uses: they would move the axis, the height range and
+// the resolution (a scan cut to part of the turn often keeps every vertex of the whole).
+Mesh without_unused_vertices(const Mesh& mesh) {
+  std::vector<int> remap(mesh.positions.size(), -1);
+  Mesh out;
+  out.texcoords = mesh.texcoords;
+  out.face_texcoords = mesh.face_texcoords;
+  out.triangles = mesh.triangles;
+  for (auto& t : out.triangles)
+    for (int& v : t) {
+      if (remap[v] < 0) {
+        remap[v] = static_cast<int>(out.positions.size());
+        out.positions.push_back(mesh.positions[v]);
+        if (mesh.has_colors()) out.colors.push_back(mesh.colors[v]);
+        if (mesh.has_normals()) out.normals.push_back(mesh.normals[v]);
+      }
+      v = remap[v];
+    }
+  return out;
+}
+
 }  // namespace
 
-ImportResult grid_from_mesh(const Mesh& mesh, const Image8* texture, const ImportOptions& options,
+ImportResult grid_from_mesh(const Mesh& input, const Image8* texture, const ImportOptions& options,
                             const std::filesystem::path& source) {
-  if (mesh.positions.empty()) throw FileFormatError(source, "the mesh has no vertices");
-  if (mesh.triangles.empty()) throw FileFormatError(source, "the mesh has no faces");
-  mesh.validate();
+  if (input.positions.empty()) throw FileFormatError(source, "the mesh has no vertices");
+  if (input.triangles.empty()) throw FileFormatError(source, "the mesh has no faces");
+  input.validate();
+  const Mesh mesh = without_unused_vertices(input);
   const Frame frame = make_frame(mesh.positions, options);
   std::vector<Eigen::Vector3d> q(mesh.positions.size());
   std::vector<CylSample> cyl(mesh.positions.size());
@@ -543,20 +565,8 @@ ImportResult grid_from_organised_cloud(const PointCloud& cloud, const ImportOpti
     r.report.input_kind = "organised point cloud";
     return r;
   }
-  // The axis and spacing from the used vertices only (unused lattice slots sit at the origin).
-  Mesh compact;
-  std::vector<int> remap(lattice.positions.size(), -1);
-  for (auto& t : lattice.triangles)
-    for (int& v : t) {
-      if (remap[v] < 0) {
-        remap[v] = static_cast<int>(compact.positions.size());
-        compact.positions.push_back(lattice.positions[v]);
-        if (lattice.has_colors()) compact.colors.push_back(lattice.colors[v]);
-      }
-      v = remap[v];
-    }
-  compact.triangles = std::move(lattice.triangles);
-  ImportResult r = grid_from_mesh(compact, nullptr, options, source);
+  // grid_from_mesh drops the lattice's unused slots (they sit at the origin).
+  ImportResult r = grid_from_mesh(lattice, nullptr, options, source);
   r.report.input_kind = "organised point cloud";
   r.report.input_points = cloud.finite_count();
   r.report.input_triangles = 0;
