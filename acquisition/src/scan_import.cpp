@@ -57,6 +57,16 @@ Eigen::Vector3d principal_direction(const std::vector<Eigen::Vector3d>& pts,
   return d[k] < 0 ? Eigen::Vector3d(-d) : d;
 }
 
+// Coordinates beyond a kilometre from the origin are no turntable scan; the bound keeps every
+// later sum, hash key and cell index far from overflow on hostile files.
+constexpr double kMaxCoordinate = 1e6;
+
+void check_extent(const std::vector<Eigen::Vector3d>& pts, const std::filesystem::path& source) {
+  for (const auto& p : pts)
+    if (!(p.cwiseAbs().maxCoeff() <= kMaxCoordinate))
+      throw FileFormatError(source, "a coordinate is not finite or beyond 1e6 in magnitude");
+}
+
 Frame make_frame(const std::vector<Eigen::Vector3d>& pts, const ImportOptions& options) {
   Frame f;
   const Eigen::Vector3d c = centroid(pts);
@@ -69,7 +79,8 @@ Frame make_frame(const std::vector<Eigen::Vector3d>& pts, const ImportOptions& o
     dir = principal_direction(pts, c);
   }
   Eigen::Vector3d point = options.axis_point.value_or(c);
-  if (!point.allFinite()) throw InvalidInputError("the axis point must be finite");
+  if (!(point.cwiseAbs().maxCoeff() <= kMaxCoordinate))
+    throw InvalidInputError("the axis point must be finite and within 1e6 of the origin");
   // The axis point moved along the axis to the height of the data's centroid: h = 0 there for
   // an estimated axis; for +z the file's own heights are kept (h = z).
   if (options.direction == AxisDirection::Z) point.z() = 0;
@@ -301,6 +312,7 @@ ImportResult grid_from_cloud(const PointCloud& input, const ImportOptions& optio
   if (cloud.positions.empty()) throw FileFormatError(source, "the cloud has no points");
   for (const auto& p : cloud.positions)
     if (!p.allFinite()) throw FileFormatError(source, "the cloud has a non-finite point");
+  check_extent(cloud.positions, source);
   const Frame frame = make_frame(cloud.positions, options);
   std::vector<CylSample> cyl;
   cyl.reserve(cloud.size());
@@ -453,6 +465,7 @@ ImportResult grid_from_mesh(const Mesh& input, const Image8* texture, const Impo
   if (input.triangles.empty()) throw FileFormatError(source, "the mesh has no faces");
   input.validate();
   const Mesh mesh = without_unused_vertices(input);
+  check_extent(mesh.positions, source);
   const Frame frame = make_frame(mesh.positions, options);
   std::vector<Eigen::Vector3d> q(mesh.positions.size());
   std::vector<CylSample> cyl(mesh.positions.size());
