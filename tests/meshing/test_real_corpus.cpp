@@ -1,0 +1,181 @@
+// The stages on the real-data corpus (libcgal-demo's scanned clouds and meshes, docs/testing.md,
+// "Real-data corpus"). There is no ground truth, so the tests assert what must hold of any
+// correct output (topology kept, no defects) and quality floors measured on these files
+// (bench_real prints the same figures; docs/benchmarks.md, "Real scans (bench_real)").
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "scanmesh/acquisition/scan_import.h"
+#include "scanmesh/core/mesh_io.h"
+#include "scanmesh/core/point_cloud_io.h"
+#include "scanmesh/meshing/fans/fans.h"
+#include "scanmesh/meshing/mesh_check.h"
+#include "scanmesh/meshing/remeshing/remesh.h"
+#include "scanmesh/meshing/remeshing/remesh_quality.h"
+#include "scanmesh/reconstruction/surface_fields.h"
+
+namespace scanmesh {
+namespace {
+
+const std::filesystem::path kCorpus(SCANMESH_CORPUS_DIR);
+
+double median_edge_length(const Mesh& m) {
+  std::vector<double> l;
+  for (const auto& t : m.triangles)
+    for (int i = 0; i < 3; ++i)
+      l.push_back((m.positions[t[i]] - m.positions[t[(i + 1) % 3]]).norm());
+  std::nth_element(l.begin(), l.begin() + l.size() / 2, l.end());
+  return l[l.size() / 2];
+}
+
+// ---- remesh: `scanmesh remesh --vertices <input count>` (the CLI's defaults) ----
+
+struct RemeshCase {
+  const char* file;
+  double min_angle_floor_deg;  // measured minus a margin (values in the comments)
+  double ge30_floor;
+  double hausdorff_edges;  // bound in input median edge lengths
+};
+
+// Measured 2026-12-03: nefertiti min 31.0 deg, 100 % >= 30, Hausdorff 0.78 edges; head 29.85,
+// 99.9 %, 0.72; elephant 12.7, 99.2 %, 2.21; lion-head 6.49, 99.1 %, 1.10.
+const RemeshCase kRemeshCases[] = {{"nefertiti.off", 30.0, 0.995, 1.0},
+                                   {"head.off", 29.0, 0.995, 1.0},
+                                   {"elephant.off", 12.0, 0.985, 2.5},
+                                   {"lion-head.off", 6.0, 0.985, 1.4}};
+
+class RealCorpusRemesh : public ::testing::TestWithParam<RemeshCase> {};
+
+TEST_P(RealCorpusRemesh, KeepsTopologyWithoutDefectsAndStaysClose) {
+  const RemeshCase& c = GetParam();
+  const Mesh in = read_mesh(kCorpus / "meshes" / c.file);
+  remeshing::RemeshOptions o;
+  o.target_vertices = static_cast<int>(in.positions.size());
+  const remeshing::RemeshResult r = remeshing::remesh(in, o);
+  const MeshCheckReport before = check_mesh(in, {.self_intersections = false});
+  const MeshCheckReport after = check_mesh(r.mesh);
+  EXPECT_TRUE(after.edge_manifold()) << after.to_text();
+  EXPECT_EQ(after.self_intersections, 0u);
+  EXPECT_EQ(after.topology.boundary_loops, before.topology.boundary_loops);
+  EXPECT_EQ(after.topology.euler_characteristic, before.topology.euler_characteristic);
+  EXPECT_GT(after.min_angle_deg, c.min_angle_floor_deg);
+  EXPECT_GE(after.fraction_min_angle_ge_30, c.ge30_floor);
+  const double hausdorff = std::max(remeshing::sampled_distance(r.mesh, in)[0],
+                                    remeshing::sampled_distance(in, r.mesh)[0]);
+  EXPECT_LT(hausdorff / median_edge_length(in), c.hausdorff_edges);
+  // The vertex count is reached within 2 % (measured: exact on all four).
+  EXPECT_NEAR(double(r.mesh.positions.size()), double(in.positions.size()),
+              0.02 * double(in.positions.size()));
+}
+
+INSTANTIATE_TEST_SUITE_P(Meshes, RealCorpusRemesh, ::testing::ValuesIn(kRemeshCases),
+                         [](const auto& param_info) {
+                           std::string n = param_info.param.file;
+                           n = n.substr(0, n.find('.'));
+                           std::replace(n.begin(), n.end(), '-', '_');
+                           return n;
+                         });
+
+// mannequin-devil.off (12977 vertices; the input itself has 1643 intersecting face pairs) is a
+// known failure, kept out of the fast suite: remesh to 12977 vertices took 80 s and returned
+// 122703 vertices, 245351 faces with 140256 intersecting face pairs and min angle 0.01 deg (still
+// edge-manifold, 1 boundary loop, Euler 1 like the input). This test states what should hold;
+// run it with --gtest_also_run_disabled_tests.
+TEST(RealCorpusRemeshKnownFailure,
+     DISABLED_MannequinDevilKeepsItsVertexCountAndHasNoIntersections) {
+  const Mesh in = read_mesh(kCorpus / "meshes" / "mannequin-devil.off");
+  remeshing::RemeshOptions o;
+  o.target_vertices = static_cast<int>(in.positions.size());
+  const remeshing::RemeshResult r = remeshing::remesh(in, o);
+  EXPECT_NEAR(double(r.mesh.positions.size()), double(in.positions.size()),
+              0.02 * double(in.positions.size()));
+  EXPECT_EQ(check_mesh(r.mesh).self_intersections, 0u);
+}
+
+// ---- fans on the scanned clouds ----
+
+class RealCorpusFans : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(RealCorpusFans, CoverTheCloudWithoutDuplicateFacesOrOverfullEdges) {
+  const auto pts = read_point_cloud(kCorpus / "points_3" / GetParam()).finite_points().positions;
+  const FanResult f = build_fans(pts);
+  const MeshCheckReport r = check_mesh(f.mesh);
+  // Measured: 1.86 (oni) to 2.0 (kitten, radar) faces per point, every point used.
+  EXPECT_GT(double(r.faces), 1.8 * double(pts.size()));
+  EXPECT_EQ(f.stats.unused_points, 0u);
+  EXPECT_EQ(f.mesh.positions.size(), pts.size());  // the input points are the vertices
+  EXPECT_EQ(r.duplicate_faces, 0u);
+  // The assembly refuses any third face on an edge (fans.h), so edges stay manifold; vertices do
+  // not (issue 26): measured non-manifold vertices kitten 0, hippo1 40, hippo2 51, oni 184,
+  // radar 0 — recorded, not asserted.
+  EXPECT_EQ(r.topology.nonmanifold_edges, 0u);
+  RecordProperty("nonmanifold_vertices", std::to_string(r.nonmanifold_vertices));
+  RecordProperty("self_intersections", std::to_string(r.self_intersections));
+  RecordProperty("boundary_loops", std::to_string(r.topology.boundary_loops));
+}
+
+INSTANTIATE_TEST_SUITE_P(Clouds, RealCorpusFans,
+                         ::testing::Values("kitten.xyz", "hippo1.ply", "hippo2.ply", "oni.ply",
+                                           "radar.xyz"),
+                         [](const auto& param_info) {
+                           std::string n = param_info.param;
+                           return n.substr(0, n.find('.'));
+                         });
+
+// ---- curvature of imported grids ----
+
+struct CurvatureCase {
+  const char* file;
+  double finite_floor;  // share of valid cells with a finite estimate
+};
+
+// Grid-quadric at a 4-dh radius (bench_real). Measured shares: kitten 99.4 %, elephant 97.7 %,
+// lion-head 99.4 %, mannequin-devil 97.5 %. The small clouds import to ragged grids whose border
+// cells have fewer than min_points (12) neighbours within the radius, and those stay undefined:
+// hippo1 81.1 %, hippo2 84.2 %, oni 92.8 %, radar 59.6 % (a scene, not one object),
+// nefertiti 91.7 %, head 93.6 % — their floors are the measured values minus 1 %.
+const CurvatureCase kCurvatureCases[] = {
+    {"points_3/kitten.xyz", 0.95},  {"meshes/elephant.off", 0.95},
+    {"meshes/lion-head.off", 0.95}, {"meshes/mannequin-devil.off", 0.95},
+    {"points_3/hippo1.ply", 0.80},  {"points_3/hippo2.ply", 0.83},
+    {"points_3/oni.ply", 0.91},     {"points_3/radar.xyz", 0.58},
+    {"meshes/nefertiti.off", 0.90}, {"meshes/head.off", 0.92}};
+
+class RealCorpusCurvature : public ::testing::TestWithParam<CurvatureCase> {};
+
+TEST_P(RealCorpusCurvature, IsFiniteOnTheValidCells) {
+  const ImportResult im = import_scan(kCorpus / GetParam().file);
+  const RangeGrid& g = im.grid;
+  const SurfaceFields f = compute_fields_grid_quadric(g, {.radius_mm = 4 * g.dh()});
+  std::size_t valid = 0, finite = 0;
+  for (std::size_t k = 0; k < g.cell_count(); ++k) {
+    if (!g.validity()[k]) continue;
+    ++valid;
+    finite += f.defined[k] && std::isfinite(f.k1[k]) && std::isfinite(f.k2[k]) &&
+              std::isfinite(f.normal[k].norm());
+  }
+  ASSERT_GT(valid, 100u);
+  EXPECT_GE(double(finite) / double(valid), GetParam().finite_floor);
+  // No estimate is invented where the grid has no data.
+  std::size_t defined_without_data = 0;
+  for (std::size_t k = 0; k < g.cell_count(); ++k)
+    defined_without_data += !g.validity()[k] && f.defined[k];
+  EXPECT_EQ(defined_without_data, 0u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Imported, RealCorpusCurvature, ::testing::ValuesIn(kCurvatureCases),
+                         [](const auto& param_info) {
+                           std::string n = param_info.param.file;
+                           n = n.substr(n.find('/') + 1);
+                           n = n.substr(0, n.find('.'));
+                           std::replace(n.begin(), n.end(), '-', '_');
+                           return n;
+                         });
+
+}  // namespace
+}  // namespace scanmesh
