@@ -2,11 +2,6 @@
 // analytic and quadric methods and by PCL (NormalEstimationOMP + PrincipalCurvaturesEstimation,
 // the anchor) on the same points in the same run. Prints median times, the time ratios and the
 // median errors of all three against the simulator's exact curvature.
-#include <pcl/features/normal_3d_omp.h>
-#include <pcl/features/principal_curvatures.h>
-#include <pcl/point_types.h>
-#include <pcl/search/kdtree.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -14,6 +9,7 @@
 #include <functional>
 #include <vector>
 
+#include "anchors_pcl.h"
 #include "bench_support.h"
 #include "scanmesh/reconstruction/surface_fields.h"
 #include "scanmesh/sim/range_scanner.h"
@@ -78,38 +74,17 @@ std::vector<Estimate> from_fields(const SurfaceFields& f) {
 }
 
 std::vector<Estimate> run_pcl(const RangeGrid& g, double radius) {
-  auto cloud = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
+  std::vector<Eigen::Vector3d> pts;
   std::vector<std::size_t> cell_of_point;
   for (std::size_t k = 0; k < g.cell_count(); ++k) {
     if (!g.validity()[k]) continue;
-    const Eigen::Vector3d p =
-        g.cartesian(static_cast<int>(k % g.n_phi()), static_cast<int>(k / g.n_phi()));
-    cloud->push_back(pcl::PointXYZ(static_cast<float>(p.x()), static_cast<float>(p.y()),
-                                   static_cast<float>(p.z())));
+    pts.push_back(g.cartesian(static_cast<int>(k % g.n_phi()), static_cast<int>(k / g.n_phi())));
     cell_of_point.push_back(k);
   }
-  auto tree = pcl::make_shared<pcl::search::KdTree<pcl::PointXYZ>>();
-  auto normals = pcl::make_shared<pcl::PointCloud<pcl::Normal>>();
-  pcl::NormalEstimationOMP<pcl::PointXYZ, pcl::Normal> ne(2);
-  ne.setInputCloud(cloud);
-  ne.setSearchMethod(tree);
-  ne.setRadiusSearch(radius);
-  ne.compute(*normals);
-  pcl::PrincipalCurvaturesEstimation<pcl::PointXYZ, pcl::Normal, pcl::PrincipalCurvatures> pce;
-  pce.setInputCloud(cloud);
-  pce.setInputNormals(normals);
-  pce.setSearchMethod(tree);
-  pce.setRadiusSearch(radius);
-  pcl::PointCloud<pcl::PrincipalCurvatures> curv;
-  pce.compute(curv);
+  const auto pcl = bench::pcl_principal_curvatures(pts, radius, 2);
   std::vector<Estimate> e(g.cell_count());
-  for (std::size_t p = 0; p < cloud->size(); ++p) {
-    const auto& n = (*normals)[p];
-    const auto& c = curv[p];
-    if (!std::isfinite(n.normal_x) || !std::isfinite(c.pc1)) continue;
-    e[cell_of_point[p]] = {true, c.pc1, c.pc2,
-                           Eigen::Vector3d(n.normal_x, n.normal_y, n.normal_z).normalized()};
-  }
+  for (std::size_t p = 0; p < pts.size(); ++p)
+    if (pcl[p].ok) e[cell_of_point[p]] = {true, pcl[p].pc1, pcl[p].pc2, pcl[p].normal};
   return e;
 }
 

@@ -1,12 +1,6 @@
 // Point-cloud fans vs PCL GP3 vs CGAL advancing front, on seed 002's generic clouds and the
 // simulated head; plus 1M-point random-sphere throughput. Prints a Markdown table.
-// PCL and CGAL headers appear only in this file.
-#include <CGAL/Advancing_front_surface_reconstruction.h>
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <pcl/point_types.h>
-#include <pcl/search/kdtree.h>
-#include <pcl/surface/gp3.h>
-
+// PCL and CGAL through the shared anchors (anchors_pcl.h, anchors_cgal.h).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -16,6 +10,8 @@
 #include <vector>
 
 #include "../tests/meshing/fans/fan_test_clouds.h"
+#include "anchors_cgal.h"
+#include "anchors_pcl.h"
 #include "bench_support.h"
 #include "scanmesh/meshing/fans/fans.h"
 #include "scanmesh/meshing/mesh_check.h"
@@ -38,23 +34,6 @@ struct Row {
   std::string note;
 };
 
-double mean_spacing(const std::vector<Vector3d>& pts) {
-  pcl::PointCloud<pcl::PointXYZ>::Ptr c(new pcl::PointCloud<pcl::PointXYZ>);
-  for (const auto& p : pts) c->push_back(pcl::PointXYZ(float(p.x()), float(p.y()), float(p.z())));
-  pcl::search::KdTree<pcl::PointXYZ> tree;
-  tree.setInputCloud(c);
-  double sum = 0;
-  std::vector<int> idx;
-  std::vector<float> d2;
-  const std::size_t step = std::max<std::size_t>(1, pts.size() / 2000);
-  std::size_t n = 0;
-  for (std::size_t i = 0; i < pts.size(); i += step, ++n) {
-    tree.nearestKSearch(static_cast<int>(i), 2, idx, d2);
-    sum += std::sqrt(d2[1]);
-  }
-  return sum / static_cast<double>(n);
-}
-
 Row run_fans(const std::string& name, const std::vector<Vector3d>& pts, const FanOptions& o) {
   Row row{name, "fans (seed 002)", pts.size()};
   const double t0 = now();
@@ -72,63 +51,20 @@ Row run_gp3(const std::string& name, const std::vector<Vector3d>& pts, const Fan
   Row row{name, "PCL GP3", pts.size()};
   const double t0 = now();
   const auto normals = estimate_fan_normals(pts, o);  // the same normals the fans use
-  pcl::PointCloud<pcl::PointNormal>::Ptr cloud(new pcl::PointCloud<pcl::PointNormal>);
-  cloud->reserve(pts.size());
-  for (std::size_t i = 0; i < pts.size(); ++i) {
-    pcl::PointNormal p;
-    p.x = float(pts[i].x());
-    p.y = float(pts[i].y());
-    p.z = float(pts[i].z());
-    p.normal_x = float(normals[i].x());
-    p.normal_y = float(normals[i].y());
-    p.normal_z = float(normals[i].z());
-    cloud->push_back(p);
-  }
-  pcl::search::KdTree<pcl::PointNormal>::Ptr tree(new pcl::search::KdTree<pcl::PointNormal>);
-  tree->setInputCloud(cloud);
-  pcl::GreedyProjectionTriangulation<pcl::PointNormal> gp3;
-  gp3.setSearchRadius(g_gp3_radius * spacing);
-  gp3.setMu(g_gp3_mu);
-  gp3.setMaximumNearestNeighbors(100);
-  gp3.setMaximumSurfaceAngle(M_PI / 4);
-  gp3.setMinimumAngle(M_PI / 18);
-  gp3.setMaximumAngle(2 * M_PI / 3);
-  gp3.setNormalConsistency(true);
-  gp3.setConsistentVertexOrdering(true);
-  gp3.setInputCloud(cloud);
-  gp3.setSearchMethod(tree);
-  std::vector<pcl::Vertices> polys;
-  gp3.reconstruct(polys);
+  const Mesh m = bench::pcl_gp3(pts, normals, spacing, {g_gp3_radius, g_gp3_mu});
   row.seconds = now() - t0;
-  Mesh m;
-  m.positions = pts;
-  for (const auto& v : polys)
-    if (v.vertices.size() == 3)
-      m.triangles.push_back({int(v.vertices[0]), int(v.vertices[1]), int(v.vertices[2])});
   row.r = check_mesh(m);
   return row;
 }
 
 Row run_cgal(const std::string& name, const std::vector<Vector3d>& pts) {
-  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
   Row row{name, "CGAL AFSR", pts.size()};
-  std::vector<K::Point_3> cp;
-  cp.reserve(pts.size());
-  for (const auto& p : pts) cp.emplace_back(p.x(), p.y(), p.z());
-  std::vector<std::array<std::size_t, 3>> facets;
   const double t0 = now();
-  try {
-    CGAL::advancing_front_surface_reconstruction(cp.begin(), cp.end(), std::back_inserter(facets));
-  } catch (const std::exception& e) {
-    row.ok = false;
-    row.note = e.what();
-  }
+  const Mesh m = bench::cgal_afsr(pts, &row.note);
   row.seconds = now() - t0;
-  Mesh m;
-  m.positions = pts;
-  for (const auto& f : facets) m.triangles.push_back({int(f[0]), int(f[1]), int(f[2])});
+  row.ok = row.note.empty();
   row.r = check_mesh(m);
-  if (facets.empty()) {
+  if (m.triangles.empty()) {
     row.ok = false;
     if (row.note.empty()) row.note = "no facets";
   }
@@ -217,7 +153,7 @@ int main(int argc, char** argv) {
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   std::vector<std::string> ratios;
   for (const auto& c : clouds) {
-    const double spacing = mean_spacing(c.pts);
+    const double spacing = bench::mean_spacing(c.pts);
     // each method runs 3 times; the row keeps the median time (the machine is shared)
     auto median_of_3 = [](const std::function<Row()>& run) {
       std::vector<Row> rows;
