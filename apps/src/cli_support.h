@@ -19,6 +19,7 @@ enum ExitCode : int {
   kDeviceFailure = 7,    //!< a camera or board failed, vanished, stalled or answered nonsense
   kOutOfTolerance = 8,   //!< `scanmesh check-calibration`: a measured error exceeds its tolerance
   kMeshIncomplete = 9,   //!< `scanmesh animesh`: written, but with open fronts or failing its check
+  kRequirementNotMet = 10,  //!< `scanmesh check --require`: a required property does not hold
 };
 
 //! Runs a command; maps scanmesh's typed errors to an exit code and one line on stderr.

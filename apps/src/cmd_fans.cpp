@@ -2,6 +2,7 @@
 #include <iomanip>
 #include <iostream>
 
+#include <algorithm>
 #include <filesystem>
 
 #include "cli_support.h"
@@ -18,7 +19,7 @@ namespace scanmesh::cli {
 
 int run_fans(const FansArgs& args) {
   args.options.validate();
-  const std::vector<Eigen::Vector3d> cloud = read_point_cloud(args.cloud).positions;
+  const PointCloud cloud = read_point_cloud(args.cloud);
   FanOptions options = args.options;
   // A grid's cells come from a turntable scan: their outside is away from the axis.
   if (std::filesystem::path(args.cloud).extension() == ".smg") options.orient_away_from_axis = true;
@@ -41,7 +42,9 @@ int run_fans(const FansArgs& args) {
             << "  cell edge " << s.cell_edge << ", PCA fallbacks " << s.pca_fallbacks
             << ", open fans " << s.open_fans << ", rejected triangles " << s.rejected_triangles
             << ", hole triangles " << s.hole_triangles << ", inserted points " << s.inserted_points
-            << ", unused points " << s.unused_points << "\n";
+            << ", unused points " << s.unused_points << "\n"
+            << "  surface growth: " << s.seeds << " seeds, " << s.glued_triangles
+            << " glued triangles, " << s.bowtie_faces_removed << " faces off bow-ties\n";
   std::cout.unsetf(std::ios::floatfield);
   if (!args.histogram_png.empty() || args.check) {
     const MeshCheckReport report = check_mesh(result.mesh);
@@ -53,11 +56,29 @@ int run_fans(const FansArgs& args) {
 }
 
 int run_check(const CheckArgs& args) {
+  std::vector<MeshProperty> required;
+  if (!args.require.empty()) required = parse_mesh_properties(args.require);
+  const bool wants_intersections =
+      std::find(required.begin(), required.end(), MeshProperty::IntersectionFree) !=
+      required.end();
+  if (wants_intersections && args.skip_intersections)
+    throw InvalidInputError("--require intersection-free needs the self-intersection test, "
+                            "which --no-intersections skips");
   const Mesh mesh = read_mesh(args.mesh);
   const MeshCheckReport report = check_mesh(mesh, {.self_intersections = !args.skip_intersections});
   std::cout << args.mesh << "\n" << report.to_text();
   if (!args.histogram_png.empty()) write_quality_histogram_png(args.histogram_png, report);
-  return report.edge_manifold() ? kSuccess : kNotEdgeManifold;
+  if (required.empty()) return report.edge_manifold() ? kSuccess : kNotEdgeManifold;
+  // Only the required properties decide the exit code; each failing one is named on stderr.
+  bool all_hold = true;
+  for (const PropertyVerdict& v : mesh_verdicts(report)) {
+    if (std::find(required.begin(), required.end(), v.property) == required.end()) continue;
+    if (v.holds) continue;
+    all_hold = false;
+    std::cerr << "scanmesh check: " << args.mesh << " is not " << property_name(v.property)
+              << (v.evidence.empty() ? "" : ": " + v.evidence) << "\n";
+  }
+  return all_hold ? kSuccess : kRequirementNotMet;
 }
 
 }  // namespace scanmesh::cli

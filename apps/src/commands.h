@@ -123,6 +123,7 @@ struct CheckArgs {
   std::string mesh;
   std::string histogram_png;
   bool skip_intersections = false;
+  std::string require;  //!< comma-separated MeshProperty names that decide the exit code
 };
 int run_check(const CheckArgs& args);
 

@@ -154,6 +154,10 @@ int main(int argc, char** argv) {
   check_cmd->add_option("--histogram", check.histogram_png, "Min-angle histogram (PNG)");
   check_cmd->add_flag("--no-intersections", check.skip_intersections,
                       "Skip the self-intersection test");
+  check_cmd->add_option("--require", check.require,
+                        "Comma-separated properties that set the exit code (10 when one fails): "
+                        "non-empty, closed, edge-manifold, vertex-manifold, oriented, "
+                        "intersection-free, no-degenerate, no-duplicates");
 
   ParticlesArgs particles;
   auto* particles_cmd = app.add_subcommand(

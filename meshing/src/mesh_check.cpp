@@ -1,5 +1,7 @@
 #include "scanmesh/meshing/mesh_check.h"
 
+#include "scanmesh/core/errors.h"
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -348,8 +350,11 @@ std::string MeshCheckReport::to_text() const {
   }
   o << "\n"
     << "unreferenced vertices " << topology.unreferenced_vertices << "\n"
-    << "Euler characteristic  " << topology.euler_characteristic << "\n"
-    << "min angle [deg]       " << min_angle_deg << " (mean of per-face minima "
+    << "components            " << topology.components << "\n"
+    << "Euler characteristic  " << topology.euler_characteristic << "\n";
+  if (defect_free() && topology.inconsistent_edges == 0)
+    o << "genus                 " << topology.genus() << "\n";
+  o << "min angle [deg]       " << min_angle_deg << " (mean of per-face minima "
     << mean_min_angle_deg << ")\n"
     << "quality q             min " << min_quality << ", mean " << mean_quality
     << "  (q = 4 sqrt3 A / sum l^2)\n"
@@ -357,9 +362,87 @@ std::string MeshCheckReport::to_text() const {
     << "min-angle histogram   ";
   for (std::size_t i = 0; i < min_angle_histogram.size(); ++i)
     o << (i ? " " : "") << min_angle_histogram[i];
-  o << "  (5 deg bins from 0)\n"
-    << "edge-manifold         " << (edge_manifold() ? "yes" : "NO") << "\n";
+  o << "  (5 deg bins from 0)\n";
+  for (const PropertyVerdict& v : mesh_verdicts(*this)) {
+    std::string name = property_name(v.property);
+    name.resize(22, ' ');
+    o << name << (!v.known ? "not checked" : v.holds ? "yes" : "NO");
+    if (!v.evidence.empty()) o << " (" << v.evidence << ")";
+    o << "\n";
+  }
   return o.str();
+}
+
+namespace {
+constexpr std::array<MeshProperty, 8> kAllProperties{
+    MeshProperty::NonEmpty,         MeshProperty::Closed,       MeshProperty::EdgeManifold,
+    MeshProperty::VertexManifold,   MeshProperty::Oriented,     MeshProperty::IntersectionFree,
+    MeshProperty::NoDegenerate,     MeshProperty::NoDuplicates};
+}  // namespace
+
+const char* property_name(MeshProperty p) {
+  switch (p) {
+    case MeshProperty::NonEmpty: return "non-empty";
+    case MeshProperty::Closed: return "closed";
+    case MeshProperty::EdgeManifold: return "edge-manifold";
+    case MeshProperty::VertexManifold: return "vertex-manifold";
+    case MeshProperty::Oriented: return "oriented";
+    case MeshProperty::IntersectionFree: return "intersection-free";
+    case MeshProperty::NoDegenerate: return "no-degenerate";
+    case MeshProperty::NoDuplicates: return "no-duplicates";
+  }
+  return "?";
+}
+
+std::span<const MeshProperty> all_mesh_properties() { return kAllProperties; }
+
+std::vector<MeshProperty> parse_mesh_properties(const std::string& list) {
+  std::vector<MeshProperty> out;
+  std::string valid;
+  for (MeshProperty p : kAllProperties) valid += std::string(valid.empty() ? "" : ", ") + property_name(p);
+  std::size_t begin = 0;
+  while (begin <= list.size()) {
+    const std::size_t end = std::min(list.find(',', begin), list.size());
+    const std::string name = list.substr(begin, end - begin);
+    begin = end + 1;
+    if (name.empty()) continue;
+    const auto* it = std::find_if(kAllProperties.begin(), kAllProperties.end(),
+                                  [&](MeshProperty p) { return name == property_name(p); });
+    if (it == kAllProperties.end())
+      throw InvalidInputError("unknown mesh property '" + name + "' (valid: " + valid + ")");
+    out.push_back(*it);
+  }
+  if (out.empty()) throw InvalidInputError("no mesh property given (valid: " + valid + ")");
+  return out;
+}
+
+std::vector<PropertyVerdict> mesh_verdicts(const MeshCheckReport& r) {
+  const TopologyStats& t = r.topology;
+  auto count = [](std::size_t n, const char* what) {
+    return n ? std::to_string(n) + " " + what : std::string();
+  };
+  std::vector<PropertyVerdict> v;
+  v.push_back({MeshProperty::NonEmpty, true, r.faces > 0, r.faces ? "" : "no faces"});
+  std::string open = count(t.boundary_loops, "boundary loops");
+  if (t.boundary_edges) open += " (" + std::to_string(t.boundary_edges) + " boundary edges)";
+  if (r.faces == 0) open = "no faces";
+  if (!r.edge_manifold()) open += std::string(open.empty() ? "" : ", ") + "not edge-manifold";
+  v.push_back({MeshProperty::Closed, true, r.faces > 0 && t.boundary_edges == 0 && r.edge_manifold(),
+               open});
+  v.push_back({MeshProperty::EdgeManifold, true, r.edge_manifold(),
+               count(t.nonmanifold_edges, "edges with more than two faces")});
+  v.push_back({MeshProperty::VertexManifold, true, r.nonmanifold_vertices == 0,
+               count(r.nonmanifold_vertices, "vertices whose faces form several fans")});
+  v.push_back({MeshProperty::Oriented, true, t.inconsistent_edges == 0,
+               count(t.inconsistent_edges, "edges traversed twice in one direction")});
+  v.push_back({MeshProperty::IntersectionFree, r.self_intersections_checked,
+               r.self_intersections_checked && r.self_intersections == 0,
+               count(r.self_intersections, "intersecting face pairs")});
+  v.push_back({MeshProperty::NoDegenerate, true, r.degenerate_faces == 0,
+               count(r.degenerate_faces, "degenerate faces")});
+  v.push_back({MeshProperty::NoDuplicates, true, r.duplicate_faces == 0,
+               count(r.duplicate_faces, "duplicate faces")});
+  return v;
 }
 
 }  // namespace scanmesh

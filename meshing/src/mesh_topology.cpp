@@ -49,6 +49,23 @@ void count_loops(const std::vector<std::pair<int, int>>& boundary, TopologyStats
             std::greater<>());
 }
 
+// Faces joined through shared vertices (union-find over the vertices); a component touching
+// another only at a vertex counts once, as the Euler formula of a pinched surface needs.
+std::size_t count_components(const Mesh& mesh, const std::vector<bool>& referenced) {
+  std::vector<int> parent(mesh.positions.size());
+  for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = static_cast<int>(i);
+  auto find = [&](int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  for (const auto& t : mesh.triangles)
+    for (int k = 1; k < 3; ++k) parent[find(t[k])] = find(t[0]);
+  std::size_t roots = 0;
+  for (std::size_t i = 0; i < parent.size(); ++i)
+    if (referenced[i] && find(static_cast<int>(i)) == static_cast<int>(i)) ++roots;
+  return roots;
+}
+
 }  // namespace
 
 TopologyStats topology_stats(const Mesh& mesh) {
@@ -84,6 +101,7 @@ TopologyStats topology_stats(const Mesh& mesh) {
   stats.euler_characteristic = used_vertices - static_cast<long long>(stats.edges) +
                                static_cast<long long>(mesh.triangles.size());
   count_loops(boundary, stats);
+  stats.components = count_components(mesh, referenced);
   return stats;
 }
 

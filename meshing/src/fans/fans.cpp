@@ -127,7 +127,7 @@ int omp_threads(const FanOptions& o) { return o.threads > 0 ? o.threads : omp_ge
 
 // §3.4: plane through the 3 nearest neighbours; PCA of 10 neighbours when those 3 are
 // (near-)collinear. Then orientation by propagation over the k-NN graph (§3.4, [John '99] 2.6).
-void compute_normals(Context& ctx) {
+void compute_normals(Context& ctx, const std::vector<Eigen::Vector3f>* given) {
   const auto& pts = ctx.pts;
   const int n = static_cast<int>(pts.size());
   ctx.normals.assign(n, Vector3d::UnitZ());
@@ -195,7 +195,11 @@ void compute_normals(Context& ctx) {
       }
     }
   };
-  if (ctx.opt.orient_away_from_axis) {
+  if (given) {
+    // The cloud's own normals know the outside; they only orient, the fans keep the estimates.
+    for (int c = 0; c < n; ++c)
+      if (ref[c].dot((*given)[c].cast<double>()) < 0) ref[c] = -ref[c];
+  } else if (ctx.opt.orient_away_from_axis) {
     for (int c = 0; c < n; ++c)
       if (ref[c].dot(Vector3d(pts[c].x(), pts[c].y(), 0.0)) < 0) ref[c] = -ref[c];
   } else {
@@ -407,6 +411,31 @@ class Assembly {
   bool edge_exists(int u, int v) const {
     return directed_edge_used(u, v) || directed_edge_used(v, u);
   }
+  // Third corner of the face with the directed edge u -> v, or -1.
+  int third_vertex(int u, int v) const {
+    for (int f : star_[u]) {
+      const auto& t = faces_[f];
+      for (int k = 0; k < 3; ++k)
+        if (t[k] == u && t[(k + 1) % 3] == v) return t[(k + 2) % 3];
+    }
+    return -1;
+  }
+  // Calls visit(p, q) for every boundary half-edge p -> q (no face has q -> p) at vertex a.
+  template <class Visit>
+  void boundary_half_edges_at(int a, Visit&& visit) const {
+    for (int f : star_[a]) {
+      const auto& t = faces_[f];
+      for (int k = 0; k < 3; ++k) {
+        const int p = t[k], q = t[(k + 1) % 3];
+        if ((p == a || q == a) && !directed_edge_used(q, p)) visit(p, q);
+      }
+    }
+  }
+  bool on_boundary(int a) const {
+    bool open = false;
+    boundary_half_edges_at(a, [&](int, int) { open = true; });
+    return open;
+  }
 
   // Checks and adds triangle (a, b, c), counter-clockwise seen from outside. `in_3d`: the
   // overlap test is a 3D intersection test against the corners' faces instead of the planar
@@ -500,6 +529,242 @@ class Assembly {
   std::vector<std::vector<int>> star_;
   double eps_area_;
 };
+
+// ---------------------------------------------------------------------------------------------
+// Surface growth: the fan triangles are candidates, and the mesh grows from seed triangles
+// across its boundary edges, like an advancing front, best-voted candidates first. A candidate
+// joins only where it keeps every vertex a single fan of faces (vertex-manifold), so bow-ties
+// are never built and need no repair. Gap (seed §3.6 assembly order, docs/fans.md decision 11):
+// the seed merges fans in point order; on real scans that order leaves vertices whose faces
+// form several wedges wherever neighbouring fans disagree.
+class SurfaceGrowth {
+  // Gap: a glue joins two fronts and may make a handle; only candidates at least two fans
+  // agree on may do it (with one vote, noisy regions of hippo1/2 and oni grew 1-2 spurious
+  // handles each).
+  static constexpr int kGlueVotes = 2;
+
+ public:
+  SurfaceGrowth(Assembly& as, const std::vector<Vector3d>& pts,
+                const std::vector<std::array<int, 4>>& cands, int n)
+      : as_(as), pts_(pts), cands_(cands), used_(cands.size(), 0), start_(n + 1, 0) {
+    for (const auto& c : cands)
+      for (int k = 0; k < 3; ++k) ++start_[c[k] + 1];
+    for (int v = 0; v < n; ++v) start_[v + 1] += start_[v];
+    list_.resize(start_[n]);
+    std::vector<int> fill(start_.begin(), start_.end() - 1);
+    for (std::size_t i = 0; i < cands.size(); ++i)
+      for (int k = 0; k < 3; ++k) list_[fill[cands[i][k]]++] = static_cast<int>(i);
+  }
+
+  // Seeds: a candidate whose corners are all still free starts a new front (3 votes first,
+  // then 2, then 1: on co-circular samplings such as a square grid the fans split every
+  // square differently and no triangle has more than one vote); each front is grown out
+  // before the next seed.
+  void grow() {
+    for (int votes = 3; votes >= 1; --votes)
+      for (std::size_t i = 0; i < cands_.size(); ++i) {
+        const auto& c = cands_[i];
+        if (used_[i] || c[3] != votes) continue;
+        if (has_faces(c[0]) || has_faces(c[1]) || has_faces(c[2])) continue;
+        if (!as_.try_add({c[0], c[1], c[2]})) continue;
+        used_[i] = 1;
+        ++seeds_;
+        push_edges_of({c[0], c[1], c[2]});
+        drain(false);
+      }
+    // Fronts that met stall where a candidate's third corner is on the boundary but shares no
+    // edge with the new face ("glue"): allowed now, one at a time, each followed by the normal
+    // growth, which zips the two fronts together from the glued vertex.
+    std::vector<std::pair<int, int>> open;
+    for (std::size_t f = 0; f < as_.faces().size(); ++f) {
+      if (!as_.alive()[f]) continue;
+      const auto& t = as_.faces()[f];
+      for (int k = 0; k < 3; ++k)
+        if (!as_.directed_edge_used(t[(k + 1) % 3], t[k])) open.emplace_back(t[k], t[(k + 1) % 3]);
+    }
+    for (const auto& [u, v] : open) {
+      const std::size_t before = as_.faces().size();
+      const std::size_t log_before = log_.size();
+      if (!attach(u, v, kGlueVotes, true)) continue;
+      const int w = as_.faces()[before][2];
+      drain(false);
+      // A glue the growth could not zip from the glued vertex leaves a bow-tie: the glue and
+      // what grew after it are taken back (their candidates, but the glue's, usable again).
+      if (wedges_at(w) > 1) {
+        for (std::size_t f = before; f < as_.faces().size(); ++f)
+          if (as_.alive()[f]) as_.remove(static_cast<int>(f));
+        for (std::size_t i = log_before + 1; i < log_.size(); ++i) used_[log_[i]] = 0;
+        log_.resize(log_before);
+        for (auto& q : queue_) q.clear();
+        --glued_;
+        ++unzipped_;
+      }
+    }
+  }
+
+  std::size_t seeds() const { return seeds_; }
+  std::size_t glued() const { return glued_; }
+  std::size_t unzipped() const { return unzipped_; }
+  std::size_t unused_candidates() const {
+    return static_cast<std::size_t>(std::count(used_.begin(), used_.end(), 0));
+  }
+
+ private:
+  struct Option {
+    int cand, w, votes;
+    double flatness;  // cosine between the normals of the existing and the new face
+  };
+
+  bool has_faces(int v) const { return !as_.star()[v].empty(); }
+
+  // Edge-connected groups of faces around v (1 for a manifold vertex).
+  int wedges_at(int v) const {
+    const auto& star = as_.star()[v];
+    std::vector<int> label(star.size());
+    for (std::size_t i = 0; i < star.size(); ++i) label[i] = static_cast<int>(i);
+    auto find = [&](int i) {
+      while (label[i] != i) i = label[i] = label[label[i]];
+      return i;
+    };
+    int groups = static_cast<int>(star.size());
+    for (std::size_t i = 0; i < star.size(); ++i)
+      for (std::size_t j = i + 1; j < star.size(); ++j) {
+        const auto& a = as_.faces()[star[i]];
+        const auto& b = as_.faces()[star[j]];
+        bool shared = false;
+        for (int x : a)
+          if (x != v && (x == b[0] || x == b[1] || x == b[2])) shared = true;
+        const int ri = find(static_cast<int>(i)), rj = find(static_cast<int>(j));
+        if (shared && ri != rj) {
+          label[ri] = rj;
+          --groups;
+        }
+      }
+    return groups;
+  }
+
+  void drain(bool glue) {
+    while (true) {
+      int level = 3;
+      while (level >= 1 && queue_[level].empty()) --level;
+      if (level < 1) return;
+      const auto [u, v] = queue_[level].front();
+      queue_[level].pop_front();
+      attach(u, v, level, glue);
+    }
+  }
+
+  // Candidates on the far side of the boundary half-edge u -> v, best first.
+  void options_at(int u, int v, std::vector<Option>& out) const {
+    out.clear();
+    const int x = as_.third_vertex(u, v);
+    if (x < 0 || as_.directed_edge_used(v, u)) return;  // not (or no longer) a boundary edge
+    const Vector3d n0 = (pts_[v] - pts_[u]).cross(pts_[x] - pts_[u]).normalized();
+    for (int i = start_[u]; i < start_[u + 1]; ++i) {
+      const int ci = list_[i];
+      if (used_[ci]) continue;
+      const auto& c = cands_[ci];
+      if (c[0] != v && c[1] != v && c[2] != v) continue;
+      const int w = c[0] + c[1] + c[2] - u - v;
+      if (w == x) continue;
+      const Vector3d n1 = (pts_[u] - pts_[v]).cross(pts_[w] - pts_[v]).normalized();
+      out.push_back({ci, w, c[3], n0.dot(n1)});
+    }
+    std::sort(out.begin(), out.end(), [](const Option& a, const Option& b) {
+      return a.votes != b.votes ? a.votes > b.votes : a.flatness > b.flatness;
+    });
+  }
+
+  // The new face (v, u, w) keeps w a single fan of faces when w is free or shares an edge
+  // with it; otherwise (a "glue") only when allowed and w is on the boundary.
+  bool keeps_vertex_manifold(int u, int v, int w, bool glue) const {
+    if (!has_faces(w)) return true;
+    if (as_.edge_exists(v, w) || as_.edge_exists(w, u)) return true;
+    return glue && as_.on_boundary(w);
+  }
+
+  // Tries the candidates of boundary half-edge u -> v with at least `level` votes; re-queues
+  // the edge at the next lower level when only weaker candidates remain.
+  bool attach(int u, int v, int level, bool glue) {
+    options_at(u, v, options_);
+    for (const Option& o : options_) {
+      if (o.votes < level) {
+        queue_[o.votes].emplace_back(u, v);
+        return false;
+      }
+      if (!keeps_vertex_manifold(u, v, o.w, glue)) continue;
+      const bool glued = has_faces(o.w) && !as_.edge_exists(v, o.w) && !as_.edge_exists(o.w, u);
+      if (!as_.try_add({v, u, o.w})) continue;
+      used_[o.cand] = 1;
+      log_.push_back(o.cand);
+      if (glued) ++glued_;
+      push_edges_of({v, u, o.w});
+      return true;
+    }
+    return false;
+  }
+
+  // Queues every boundary half-edge at the corners of a new face: its own free edges, and the
+  // stalled edges around it whose candidates may now attach.
+  void push_edges_of(const std::array<int, 3>& t) {
+    for (int a : t)
+      as_.boundary_half_edges_at(a, [&](int p, int q) { queue_[3].emplace_back(p, q); });
+  }
+
+  Assembly& as_;
+  const std::vector<Vector3d>& pts_;
+  const std::vector<std::array<int, 4>>& cands_;
+  std::vector<std::uint8_t> used_;
+  std::vector<int> start_, list_;  // candidates of each vertex (CSR)
+  std::array<std::deque<std::pair<int, int>>, 4> queue_;  // boundary half-edges by votes
+  std::vector<Option> options_;
+  std::vector<int> log_;  // candidates in the order they joined
+  std::size_t seeds_ = 0, glued_ = 0, unzipped_ = 0;
+};
+
+// Faces around v split into edge-connected wedges; all but the largest leave v's star. Only
+// what the growth's glue steps left unzipped and hole closing could not join ends here; each
+// removed face is counted.
+std::size_t detach_bowties(Assembly& as, int n) {
+  std::size_t removed = 0;
+  std::vector<int> work(n);
+  for (int v = 0; v < n; ++v) work[v] = v;
+  std::vector<int> label;
+  while (!work.empty()) {
+    const int v = work.back();
+    work.pop_back();
+    const std::vector<int> star = as.star()[v];
+    if (star.size() < 2) continue;
+    // union-find over the faces of the star: faces sharing an edge at v are one wedge
+    label.assign(star.size(), 0);
+    for (std::size_t i = 0; i < star.size(); ++i) label[i] = static_cast<int>(i);
+    auto find = [&](int i) {
+      while (label[i] != i) i = label[i] = label[label[i]];
+      return i;
+    };
+    for (std::size_t i = 0; i < star.size(); ++i)
+      for (std::size_t j = i + 1; j < star.size(); ++j) {
+        const auto& a = as.faces()[star[i]];
+        const auto& b = as.faces()[star[j]];
+        int shared = 0;
+        for (int x : a)
+          if (x != v && (x == b[0] || x == b[1] || x == b[2])) ++shared;
+        if (shared > 0) label[find(static_cast<int>(i))] = find(static_cast<int>(j));
+      }
+    std::vector<int> size(star.size(), 0);
+    for (std::size_t i = 0; i < star.size(); ++i) ++size[find(static_cast<int>(i))];
+    const int keep = static_cast<int>(std::max_element(size.begin(), size.end()) - size.begin());
+    for (std::size_t i = 0; i < star.size(); ++i) {
+      if (find(static_cast<int>(i)) == keep) continue;
+      const auto t = as.faces()[star[i]];
+      as.remove(star[i]);
+      ++removed;
+      for (int x : t)
+        if (x != v) work.push_back(x);
+    }
+  }
+  return removed;
+}
 
 // Closes the small holes where neighbouring fans disagreed: boundary loops of at most
 // `max_edges` edges, by ear clipping in the loop's mean plane, best (largest smallest angle)
@@ -621,6 +886,27 @@ std::size_t close_holes(Assembly& as, const std::vector<Vector3d>& pts,
   return added;
 }
 
+// A point left outside every triangle near the mesh's rim (a spike's tip, a sparse border)
+// joins the boundary half-edge u -> v of its neighbourhood that gives the triangle (v, u, p)
+// with the shortest perimeter, if it intersects nothing: a free vertex keeps the mesh manifold.
+bool attach_to_boundary(Assembly& as, const Context& ctx, int p) {
+  const auto& pts = ctx.pts;
+  std::vector<std::pair<double, std::array<int, 3>>> options;
+  for (int k = 0; k < kNormalNeighbours; ++k) {
+    const int j = ctx.knn[static_cast<std::size_t>(p) * kNormalNeighbours + k];
+    if (j < 0) continue;
+    as.boundary_half_edges_at(j, [&](int u, int v) {
+      const double perimeter =
+          (pts[u] - pts[v]).norm() + (pts[u] - pts[p]).norm() + (pts[v] - pts[p]).norm();
+      options.push_back({perimeter, {v, u, p}});
+    });
+  }
+  std::sort(options.begin(), options.end());
+  for (const auto& [perimeter, t] : options)
+    if (as.try_add(t, true)) return true;
+  return false;
+}
+
 // A point that ended in no triangle lies on a triangle of its neighbourhood: split that
 // triangle 1-to-3 through the point (keeps the mesh manifold and every point used).
 std::size_t insert_unused(Assembly& as, const Context& ctx) {
@@ -648,7 +934,10 @@ std::size_t insert_unused(Assembly& as, const Context& ctx) {
         }
       }
     }
-    if (best < 0) continue;
+    if (best < 0) {
+      inserted += attach_to_boundary(as, ctx, static_cast<int>(p)) ? 1 : 0;
+      continue;
+    }
     const auto t = as.faces()[best];
     as.remove(best);
     const int q = static_cast<int>(p);
@@ -658,6 +947,29 @@ std::size_t insert_unused(Assembly& as, const Context& ctx) {
     ++inserted;
   }
   return inserted;
+}
+
+// Each connected piece the growth built is consistently oriented in itself (every face joined
+// across an edge traversed the other way); a piece is turned round when its faces disagree
+// with the oriented normals of their corners on the whole.
+void orient_components_by_normals(std::vector<std::array<int, 3>>& faces,
+                                  const std::vector<Vector3d>& pts,
+                                  const std::vector<Vector3d>& normals) {
+  std::vector<int> parent(pts.size());
+  for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = static_cast<int>(i);
+  auto find = [&](int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  for (const auto& t : faces)
+    for (int k = 1; k < 3; ++k) parent[find(t[k])] = find(t[0]);
+  std::vector<double> agreement(pts.size(), 0.0);
+  for (const auto& t : faces) {
+    const Vector3d fn = (pts[t[1]] - pts[t[0]]).cross(pts[t[2]] - pts[t[0]]);
+    agreement[find(t[0])] += fn.dot(normals[t[0]] + normals[t[1]] + normals[t[2]]);
+  }
+  for (auto& t : faces)
+    if (agreement[find(t[0])] < 0) std::swap(t[1], t[2]);
 }
 
 void check_input(const std::vector<Vector3d>& points, const FanOptions& options) {
@@ -699,13 +1011,16 @@ std::vector<Vector3d> estimate_fan_normals(const std::vector<Vector3d>& input,
   std::vector<Vector3d> points(input.size());
   for (std::size_t i = 0; i < perm.size(); ++i) points[i] = input[perm[i]];
   Context ctx(points, options, cell_edge_formula(points, options.k));
-  compute_normals(ctx);
+  compute_normals(ctx, nullptr);
   std::vector<Vector3d> out(input.size());
   for (std::size_t i = 0; i < perm.size(); ++i) out[perm[i]] = ctx.normals[i];
   return out;
 }
 
-FanResult build_fans(const std::vector<Vector3d>& input, const FanOptions& options) {
+namespace {
+
+FanResult build_fans_impl(const std::vector<Vector3d>& input, const FanOptions& options,
+                          const std::vector<Eigen::Vector3f>* given_normals) {
   check_input(input, options);
   // Internally the points are in cell order; indices are mapped back at the end.
   const std::vector<int> perm = cell_order(input, options.k);
@@ -725,7 +1040,12 @@ FanResult build_fans(const std::vector<Vector3d>& input, const FanOptions& optio
   }
   ctx.eps_len = 1e-9 * (hi - lo).norm();  // Gap (4b): "falls on c"
   ctx.d_max = options.dmax_factor * st.cell_edge;
-  compute_normals(ctx);
+  std::vector<Eigen::Vector3f> given_sorted;
+  if (given_normals) {
+    given_sorted.resize(n);
+    for (int i = 0; i < n; ++i) given_sorted[i] = (*given_normals)[perm[i]];
+  }
+  compute_normals(ctx, given_normals ? &given_sorted : nullptr);
   st.seconds_normals = seconds_since(t0);
 
   // Steps 1-6, 7c: one fan per point, independent of the others, so they run in parallel and
@@ -764,11 +1084,18 @@ FanResult build_fans(const std::vector<Vector3d>& input, const FanOptions& optio
   // Step 9 with votes: triangle (c, r1, r2) is proposed by c and, if they agree, by r1 and r2.
   // Each distinct triangle is emitted once, by its smallest-index proposer.
   t0 = std::chrono::steady_clock::now();
-  auto has_pair = [&](int v, int x, int y) {  // fan(v) has x then y, closed between them
+  // fan(v) has x and y as consecutive spokes with a triangle between them. Either order: the
+  // votes must not depend on the normals' orientation, which noise can flip between
+  // neighbours; the surface growth below orients the faces.
+  auto has_pair = [&](int v, int x, int y) {
     const auto& f = fans[v];
     const std::size_t m = f.size();
     for (std::size_t i = 0; i < m; ++i)
-      if (f[i].id == x) return f[i].closed_after && f[(i + 1) % m].id == y;
+      if (f[i].id == x) {
+        const std::size_t prev = (i + m - 1) % m;
+        return (f[i].closed_after && f[(i + 1) % m].id == y) ||
+               (f[prev].closed_after && f[prev].id == y);
+      }
     return false;
   };
   // Two passes (count, then fill at prefix offsets) keep the order independent of threads.
@@ -810,37 +1137,34 @@ FanResult build_fans(const std::vector<Vector3d>& input, const FanOptions& optio
     proposals.swap(sorted);
   }
   Assembly as(points, 1e-9);
-  for (const auto& p : proposals) {
-    // A triangle all three fans agree on lies in disjoint angular sectors of each corner's fan,
-    // follows each corner's spokes in order (so its directed edges are unique) and is emitted
-    // once: among themselves these need no checks. Everything after them is checked.
-    if (p[3] == 3) {
-      as.add({p[0], p[1], p[2]});
-      continue;
-    }
-    if (!as.try_add({p[0], p[1], p[2]})) ++st.rejected_triangles;
-  }
+  SurfaceGrowth growth(as, points, proposals, n);
+  growth.grow();
+  st.seeds = growth.seeds();
+  st.glued_triangles = growth.glued();
+  st.rejected_triangles = growth.unused_candidates();
   fans.clear();
   fans.shrink_to_fit();
   if (options.max_hole_edges >= 3)
     st.hole_triangles = close_holes(as, points, ctx.normals, options.max_hole_edges);
   st.inserted_points = insert_unused(as, ctx);
+  st.bowtie_faces_removed = detach_bowties(as, n);
 
   Mesh& mesh = result.mesh;
   mesh.positions = input;
+  std::vector<std::array<int, 3>> faces;
   for (std::size_t f = 0; f < as.faces().size(); ++f)
-    if (as.alive()[f]) {
-      const auto& t = as.faces()[f];
-      mesh.triangles.push_back({perm[t[0]], perm[t[1]], perm[t[2]]});
-    }
-  // Consistent output orientation: faces follow the oriented normals; turn everything round
-  // if that makes the enclosed volume negative (inward normals on a closed surface).
+    if (as.alive()[f]) faces.push_back(as.faces()[f]);
+  orient_components_by_normals(faces, points, ctx.normals);
+  for (const auto& t : faces) mesh.triangles.push_back({perm[t[0]], perm[t[1]], perm[t[2]]});
+  // Without given normals the oriented estimates may point inwards as a whole: turn
+  // everything round if the enclosed volume is negative (meaningful on a closed surface).
+  const bool trust_normals = given_normals || options.orient_away_from_axis;
   double volume = 0;
   for (const auto& t : mesh.triangles) volume += input[t[0]].dot(input[t[1]].cross(input[t[2]]));
   double area = 0;
   for (const auto& t : mesh.triangles)
     area += (input[t[1]] - input[t[0]]).cross(input[t[2]] - input[t[0]]).norm();
-  const bool flip = volume < -1e-3 * area * (hi - lo).norm();
+  const bool flip = !trust_normals && volume < -1e-3 * area * (hi - lo).norm();
   if (flip)
     for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
   mesh.normals.resize(n);
@@ -851,6 +1175,21 @@ FanResult build_fans(const std::vector<Vector3d>& input, const FanOptions& optio
     for (int v : t) used[v] = 1;
   st.unused_points = static_cast<std::size_t>(std::count(used.begin(), used.end(), 0));
   st.seconds_assembly = seconds_since(t0);
+  return result;
+}
+
+}  // namespace
+
+FanResult build_fans(const std::vector<Vector3d>& points, const FanOptions& options) {
+  return build_fans_impl(points, options, nullptr);
+}
+
+FanResult build_fans(const PointCloud& input, const FanOptions& options) {
+  const PointCloud cloud = input.finite_points();
+  const bool normals = cloud.has_normals() && cloud.normals.size() == cloud.size();
+  FanResult result = build_fans_impl(cloud.positions, options, normals ? &cloud.normals : nullptr);
+  if (normals) result.mesh.normals = cloud.normals;
+  if (cloud.has_colors() && cloud.colors.size() == cloud.size()) result.mesh.colors = cloud.colors;
   return result;
 }
 

@@ -44,6 +44,35 @@ struct MeshCheckReport {
 
 MeshCheckReport check_mesh(const Mesh& mesh, const MeshCheckOptions& options = {});
 
+//! A property `scanmesh check --require` can demand of a mesh.
+enum class MeshProperty {
+  NonEmpty,          //!< at least one face
+  Closed,            //!< non-empty, no boundary edge and edge-manifold (watertight)
+  EdgeManifold,      //!< no edge with more than two faces
+  VertexManifold,    //!< the faces around every vertex form one fan
+  Oriented,          //!< every interior edge is traversed once in each direction
+  IntersectionFree,  //!< no two faces cross (needs the self-intersection test)
+  NoDegenerate,      //!< no repeated corner or zero-area face
+  NoDuplicates,      //!< no two faces with the same vertex set
+};
+
+struct PropertyVerdict {
+  MeshProperty property;
+  bool known = true;  //!< false: not tested (self-intersections skipped)
+  bool holds = false;
+  std::string evidence;  //!< what decided it, e.g. "2 boundary loops (14 edges)"
+};
+
+//! The names used on the command line and in reports ("closed", "vertex-manifold", ...).
+const char* property_name(MeshProperty p);
+//! All properties, in report order.
+std::span<const MeshProperty> all_mesh_properties();
+//! Parses a comma-separated list of property names; throws InvalidInputError naming the
+//! unknown one and listing the valid names.
+std::vector<MeshProperty> parse_mesh_properties(const std::string& list);
+//! One verdict per property, in report order.
+std::vector<PropertyVerdict> mesh_verdicts(const MeshCheckReport& report);
+
 //! Intersecting face pairs, as check_mesh counts them; with `labels` (one per face) only the
 //! pairs of faces with different labels (e.g. crossings between the regions of a mesh); with
 //! `involved` (one flag per face) only the pairs with at least one flagged face.

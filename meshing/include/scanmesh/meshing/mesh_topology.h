@@ -18,6 +18,14 @@ struct TopologyStats {
   std::vector<std::size_t> boundary_loop_lengths;  //!< in edges, longest first
   std::size_t unreferenced_vertices = 0;
   long long euler_characteristic = 0;  //!< V - E + F over referenced vertices
+  std::size_t components = 0;          //!< edge-connected groups of faces
+  //! Handles, from chi = 2 components - 2 genus - loops; meaningful for a manifold, oriented
+  //! mesh (the checker prints it only then).
+  long long genus() const {
+    return (2 * static_cast<long long>(components) - euler_characteristic -
+            static_cast<long long>(boundary_loops)) /
+           2;
+  }
 };
 
 TopologyStats topology_stats(const Mesh& mesh);

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "scanmesh/core/mesh.h"
+#include "scanmesh/core/point_cloud_io.h"
 
 namespace scanmesh {
 
@@ -49,7 +50,11 @@ struct FanStats {
   std::size_t pca_fallbacks = 0;       //!< fans rebuilt with a PCA normal
   std::size_t open_fans = 0;           //!< fans with a gap >= 180 deg at d_max (boundary)
   std::size_t proposed_triangles = 0;  //!< distinct fan triangles before assembly
-  std::size_t rejected_triangles = 0;  //!< refused by the assembly checks (4a/7a/overlap)
+  std::size_t rejected_triangles = 0;  //!< candidates the surface growth never used
+  std::size_t seeds = 0;               //!< fronts the surface growth started
+  std::size_t glued_triangles = 0;     //!< joined two fronts at a vertex (then zipped)
+  std::size_t bowtie_faces_removed = 0;  //!< faces taken off a vertex whose faces formed
+                                         //!< several wedges that nothing could join
   std::size_t hole_triangles = 0;      //!< added by hole closing
   std::size_t inserted_points = 0;     //!< unused points inserted by a 1-to-3 split
   std::size_t unused_points = 0;       //!< points in no triangle at the end
@@ -64,6 +69,13 @@ struct FanResult {
 //! Triangulates the cloud. Throws InvalidInputError for fewer than 3 points, non-finite
 //! coordinates or invalid options. Deterministic for any thread count.
 FanResult build_fans(const std::vector<Eigen::Vector3d>& points, const FanOptions& options = {});
+
+//! Meshes a cloud with its attributes: its colours become the vertex colours; its normals, when
+//! given, become the vertex normals and decide the outside (each estimated normal is turned to
+//! agree with the given one, and the faces follow) instead of propagation over the neighbour
+//! graph. Non-finite points (an organised cloud's missing pixels) are dropped first; the
+//! mesh's vertices are the finite points, in order.
+FanResult build_fans(const PointCloud& cloud, const FanOptions& options = {});
 
 //! Normals as the fan stage estimates them (3-NN plane, PCA fallback, oriented by
 //! propagation over the k-NN graph); exposed so baselines can be given the same normals.
