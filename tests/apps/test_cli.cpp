@@ -226,8 +226,13 @@ TEST(Cli, FansMeshAnXyzCloudAndCheckFindsItClosedAndManifold) {
                     (dir / "r.png").string() + " --histogram " + (dir / "q.png").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   for (const char* f : {"m.ply", "r.png", "q.png"}) EXPECT_TRUE(fs::exists(dir / f)) << f;
-  r = run("check " + mesh);
+  // A sphere's fans are watertight: each property is asked for, so each could fail.
+  r = run("check " + mesh +
+          " --require non-empty,closed,edge-manifold,vertex-manifold,oriented,"
+          "intersection-free,no-degenerate,no-duplicates");
   EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("closed                yes"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("genus                 0"), std::string::npos) << r.output;
   // A mesh with an edge shared by three faces fails the check with its own exit code.
   std::ofstream(dir / "bad.ply")
       << "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\n"
@@ -253,8 +258,43 @@ TEST(Cli, ParticlesMeshASphereSceneIntoAClosedMesh) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   for (const char* f : {"particles.ply", "particles.png", "particles.json"})
     EXPECT_TRUE(fs::exists(dir / "out" / f)) << f;
-  const RunResult c = run("check " + (dir / "out" / "particles.ply").string());
+  const RunResult c = run("check " + (dir / "out" / "particles.ply").string() +
+                          " --require closed,vertex-manifold,oriented,intersection-free");
   EXPECT_EQ(c.exit_code, 0) << c.output;
+}
+
+// `check` exits 0 on any edge-manifold mesh; --require states what must hold. A single open
+// triangle is edge- and vertex-manifold but not closed, an empty mesh is nothing.
+TEST(Cli, CheckRequireSetsTheExitCodeFromTheNamedProperties) {
+  const fs::path dir = scratch_dir("check_require");
+  const std::string header =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face ";
+  std::ofstream(dir / "tri.ply") << header
+                                 << "1\nproperty list uchar int vertex_indices\nend_header\n"
+                                    "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  std::ofstream(dir / "empty.ply") << header
+                                   << "0\nproperty list uchar int vertex_indices\nend_header\n"
+                                      "0 0 0\n1 0 0\n0 1 0\n";
+  const std::string tri = (dir / "tri.ply").string();
+  RunResult r = run("check " + tri);
+  EXPECT_EQ(r.exit_code, 0) << r.output;  // the legacy verdict: edge-manifold
+  EXPECT_NE(r.output.find("closed                NO (1 boundary loops"), std::string::npos)
+      << r.output;
+  r = run("check " + tri + " --require closed");
+  EXPECT_EQ(r.exit_code, 10) << r.output;
+  EXPECT_NE(r.output.find("is not closed"), std::string::npos) << r.output;
+  r = run("check " + tri + " --require edge-manifold,vertex-manifold,oriented,intersection-free");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  r = run("check " + (dir / "empty.ply").string() + " --require vertex-manifold,non-empty");
+  EXPECT_EQ(r.exit_code, 10) << r.output;
+  EXPECT_NE(r.output.find("is not non-empty"), std::string::npos) << r.output;
+  // An unknown property or a contradiction is a usage problem, before the file is read.
+  r = run("check " + tri + " --require watertight");
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  EXPECT_NE(r.output.find("watertight"), std::string::npos) << r.output;
+  r = run("check " + tri + " --require intersection-free --no-intersections");
+  EXPECT_EQ(r.exit_code, 3) << r.output;
 }
 
 // Scan mode: the scan's continuous surface through its implicit view; relaxation terminates

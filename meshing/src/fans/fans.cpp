@@ -32,6 +32,9 @@ constexpr int kNormalNeighbours = 10;    // PCA fallback and orientation graph
 constexpr double kAngleEps = 1e-9;       // step 4b angular epsilon (rad)
 constexpr double kCosEps = 1e-12;        // in-circle / flip tie tolerance on cosine sums
 constexpr double kOpenGap = kPi - 1e-6;  // a gap at least this wide is open: no triangle
+// Gap: the flips towards Delaunay may not bend the surface; two faces within this angle of
+// each other count as one plane (noise on a smooth scan stays below it).
+constexpr double kFlipMaxDihedralDeg = 20.0;
 
 double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
@@ -440,7 +443,10 @@ class Assembly {
   // Checks and adds triangle (a, b, c), counter-clockwise seen from outside. `in_3d`: the
   // overlap test is a 3D intersection test against the corners' faces instead of the planar
   // one (hole closing: on a noisy surface, projected neighbours overlap without intersecting).
-  bool try_add(const std::array<int, 3>& t, bool in_3d = false) {
+  // `consensus`: all three fans agree on t; when every face around its corners is such a
+  // triangle too, they lie in disjoint sectors of each corner's fan and cannot overlap, so
+  // the overlap test is skipped (the old assembly added these unchecked).
+  bool try_add(const std::array<int, 3>& t, bool in_3d = false, bool consensus = false) {
     const Vector3d& A = pts_[t[0]];
     const Vector3d& B = pts_[t[1]];
     const Vector3d& C = pts_[t[2]];
@@ -458,15 +464,24 @@ class Assembly {
     }
     for (int k = 0; k < 3; ++k)
       if (directed_edge_used(t[k], t[(k + 1) % 3])) return false;
-    if (in_3d ? intersects_star(t) : overlaps_star(t, nrm.normalized())) return false;
-    add(t);
+    const bool skip = consensus && !in_3d && all_consensus_around(t);
+    if (!skip && (in_3d ? intersects_star(t) : overlaps_star(t, nrm.normalized()))) return false;
+    add(t, consensus);
     return true;
   }
 
-  void add(const std::array<int, 3>& t) {
+  bool all_consensus_around(const std::array<int, 3>& t) const {
+    for (int v : t)
+      for (int f : star_[v])
+        if (!consensus_[f]) return false;
+    return true;
+  }
+
+  void add(const std::array<int, 3>& t, bool consensus = false) {
     const int f = static_cast<int>(faces_.size());
     faces_.push_back(t);
     alive_.push_back(1);
+    consensus_.push_back(consensus ? 1 : 0);
     for (int v : t) star_[v].push_back(f);
   }
   void remove(int f) {
@@ -526,6 +541,7 @@ class Assembly {
   const std::vector<Vector3d>& pts_;
   std::vector<std::array<int, 3>> faces_;
   std::vector<std::uint8_t> alive_;
+  std::vector<std::uint8_t> consensus_;  // all three fans proposed the face
   std::vector<std::vector<int>> star_;
   double eps_area_;
 };
@@ -546,7 +562,8 @@ class SurfaceGrowth {
  public:
   SurfaceGrowth(Assembly& as, const std::vector<Vector3d>& pts,
                 const std::vector<std::array<int, 4>>& cands, int n)
-      : as_(as), pts_(pts), cands_(cands), used_(cands.size(), 0), start_(n + 1, 0) {
+      : as_(as), pts_(pts), cands_(cands), used_(cands.size(), 0), start_(n + 1, 0),
+        waiting_(n) {
     for (const auto& c : cands)
       for (int k = 0; k < 3; ++k) ++start_[c[k] + 1];
     for (int v = 0; v < n; ++v) start_[v + 1] += start_[v];
@@ -566,7 +583,7 @@ class SurfaceGrowth {
         const auto& c = cands_[i];
         if (used_[i] || c[3] != votes) continue;
         if (has_faces(c[0]) || has_faces(c[1]) || has_faces(c[2])) continue;
-        if (!as_.try_add({c[0], c[1], c[2]})) continue;
+        if (!as_.try_add({c[0], c[1], c[2]}, false, votes == 3)) continue;
         used_[i] = 1;
         ++seeds_;
         push_edges_of({c[0], c[1], c[2]});
@@ -692,9 +709,13 @@ class SurfaceGrowth {
         queue_[o.votes].emplace_back(u, v);
         return false;
       }
-      if (!keeps_vertex_manifold(u, v, o.w, glue)) continue;
+      if (!keeps_vertex_manifold(u, v, o.w, glue)) {
+        // Only a face at w can change that: the edge waits for one.
+        waiting_[o.w].emplace_back(u, v);
+        continue;
+      }
       const bool glued = has_faces(o.w) && !as_.edge_exists(v, o.w) && !as_.edge_exists(o.w, u);
-      if (!as_.try_add({v, u, o.w})) continue;
+      if (!as_.try_add({v, u, o.w}, false, o.votes == 3)) continue;
       used_[o.cand] = 1;
       log_.push_back(o.cand);
       if (glued) ++glued_;
@@ -704,11 +725,16 @@ class SurfaceGrowth {
     return false;
   }
 
-  // Queues every boundary half-edge at the corners of a new face: its own free edges, and the
-  // stalled edges around it whose candidates may now attach.
+  // Queues the new face's free edges, and the edges that waited for one of its corners.
   void push_edges_of(const std::array<int, 3>& t) {
-    for (int a : t)
-      as_.boundary_half_edges_at(a, [&](int p, int q) { queue_[3].emplace_back(p, q); });
+    for (int k = 0; k < 3; ++k) {
+      const int p = t[k], q = t[(k + 1) % 3];
+      if (!as_.directed_edge_used(q, p)) queue_[3].emplace_back(p, q);
+    }
+    for (int a : t) {
+      for (const auto& e : waiting_[a]) queue_[3].push_back(e);
+      waiting_[a].clear();
+    }
   }
 
   Assembly& as_;
@@ -718,6 +744,7 @@ class SurfaceGrowth {
   std::vector<int> start_, list_;  // candidates of each vertex (CSR)
   std::array<std::deque<std::pair<int, int>>, 4> queue_;  // boundary half-edges by votes
   std::vector<Option> options_;
+  std::vector<std::vector<std::pair<int, int>>> waiting_;  // edges stalled on a vertex
   std::vector<int> log_;  // candidates in the order they joined
   std::size_t seeds_ = 0, glued_ = 0, unzipped_ = 0;
 };
@@ -766,11 +793,123 @@ std::size_t detach_bowties(Assembly& as, int n) {
   return removed;
 }
 
+// Edge flips towards the Delaunay condition on the surface: an interior edge whose two opposite
+// angles sum to more than 180 deg is replaced by the other diagonal of its quadrilateral when
+// that raises the pair's smallest angle, the two faces are nearly coplanar (so the surface does
+// not change shape) and the new faces pass the 3D intersection test. Where neighbouring fans
+// were built in different tangent planes the merged mesh is not Delaunay there; CGAL's
+// advancing front takes its faces from the 3D Delaunay triangulation. Returns the flips.
+std::size_t flip_to_delaunay(Assembly& as, const std::vector<Vector3d>& pts) {
+  const double cos_coplanar = std::cos(kFlipMaxDihedralDeg * kPi / 180.0);
+  auto angle_at = [&](int o, int x, int y) {
+    const Vector3d u = pts[x] - pts[o], v = pts[y] - pts[o];
+    return std::atan2(u.cross(v).norm(), u.dot(v));
+  };
+  auto min_angle = [&](int a, int b, int c) {
+    return std::min({angle_at(a, b, c), angle_at(b, c, a), angle_at(c, a, b)});
+  };
+  auto unit_normal = [&](int a, int b, int c) {
+    return (pts[b] - pts[a]).cross(pts[c] - pts[a]).normalized();
+  };
+  std::size_t flips = 0;
+  const std::size_t faces = as.faces().size();
+  for (std::size_t f = 0; f < faces; ++f) {
+    for (int k = 0; k < 3 && as.alive()[f]; ++k) {
+      const auto t = as.faces()[f];
+      const int a = t[k], b = t[(k + 1) % 3], c = t[(k + 2) % 3];
+      const int d = as.third_vertex(b, a);
+      if (d < 0 || d == c) continue;
+      if (angle_at(c, a, b) + angle_at(d, b, a) <= kPi + 1e-9) continue;  // Delaunay already
+      if (unit_normal(a, b, c).dot(unit_normal(b, a, d)) < cos_coplanar) continue;
+      if (as.edge_exists(c, d)) continue;
+      const double before = std::min(min_angle(a, b, c), min_angle(b, a, d));
+      if (std::min(min_angle(c, a, d), min_angle(d, b, c)) <= before) continue;
+      if (unit_normal(c, a, d).dot(unit_normal(d, b, c)) < cos_coplanar) continue;
+      int g = -1;
+      for (int h : as.star()[b])
+        if (as.faces()[h] == std::array<int, 3>{b, a, d} ||
+            as.faces()[h] == std::array<int, 3>{a, d, b} ||
+            as.faces()[h] == std::array<int, 3>{d, b, a})
+          g = h;
+      if (g < 0) continue;
+      const auto tg = as.faces()[g];
+      as.remove(static_cast<int>(f));
+      as.remove(g);
+      const std::size_t first = as.faces().size();
+      if (as.try_add({c, a, d}, true) && as.try_add({d, b, c}, true)) {
+        ++flips;
+        break;  // f is gone
+      }
+      for (std::size_t h = first; h < as.faces().size(); ++h)
+        if (as.alive()[h]) as.remove(static_cast<int>(h));
+      as.add(t);
+      as.add(tg);
+    }
+  }
+  return flips;
+}
+
+// Triangulates a boundary loop as a whole, maximising its smallest angle (dynamic programming
+// over the loop's sub-polygons, O(m^3) for m <= max_hole_edges): ear clipping takes the best
+// ear at each step and can leave slivers at the end. Every triangle passes the assembly's
+// checks with the 3D intersection test; if one does not, nothing is added (returns 0) and the
+// caller falls back to ear clipping. Fill faces traverse the loop backwards.
+std::size_t fill_loop_max_min_angle(Assembly& as, const std::vector<Vector3d>& pts,
+                                    const std::vector<int>& loop, double max_edge) {
+  const int m = static_cast<int>(loop.size());
+  auto min_angle = [&](int a, int b, int c) {
+    const Vector3d &A = pts[loop[a]], &B = pts[loop[b]], &C = pts[loop[c]];
+    auto ang = [](const Vector3d& o, const Vector3d& x, const Vector3d& y) {
+      return std::atan2((x - o).cross(y - o).norm(), (x - o).dot(y - o));
+    };
+    return std::min({ang(A, B, C), ang(B, C, A), ang(C, A, B)});
+  };
+  // best[i][j]: the largest smallest angle of a triangulation of loop[i..j] (j > i + 1); a
+  // chord that is already an edge of the mesh elsewhere is forbidden (it would get 3 faces).
+  std::vector<double> best(static_cast<std::size_t>(m) * m, -1.0);
+  std::vector<int> split(static_cast<std::size_t>(m) * m, -1);
+  auto at = [m](int i, int j) { return static_cast<std::size_t>(i) * m + j; };
+  for (int len = 2; len < m; ++len)
+    for (int i = 0; i + len < m; ++i) {
+      const int j = i + len;
+      if (!(i == 0 && j == m - 1) && as.edge_exists(loop[i], loop[j])) continue;
+      if ((pts[loop[i]] - pts[loop[j]]).norm() > max_edge) continue;
+      for (int k = i + 1; k < j; ++k) {
+        const double left = k == i + 1 ? kPi : best[at(i, k)];
+        const double right = j == k + 1 ? kPi : best[at(k, j)];
+        const double q = std::min({left, right, min_angle(i, k, j)});
+        if (left >= 0 && right >= 0 && q > best[at(i, j)]) {
+          best[at(i, j)] = q;
+          split[at(i, j)] = k;
+        }
+      }
+    }
+  if (!(best[at(0, m - 1)] > 0)) return 0;
+  std::vector<std::array<int, 3>> tris;
+  std::vector<std::pair<int, int>> stack{{0, m - 1}};
+  while (!stack.empty()) {
+    const auto [i, j] = stack.back();
+    stack.pop_back();
+    if (j - i < 2) continue;
+    const int k = split[at(i, j)];
+    tris.push_back({loop[j], loop[k], loop[i]});
+    stack.push_back({i, k});
+    stack.push_back({k, j});
+  }
+  const std::size_t first = as.faces().size();
+  for (const auto& t : tris)
+    if (!as.try_add(t, true)) {
+      for (std::size_t f = first; f < as.faces().size(); ++f) as.remove(static_cast<int>(f));
+      return 0;
+    }
+  return tris.size();
+}
+
 // Closes the small holes where neighbouring fans disagreed: boundary loops of at most
 // `max_edges` edges, by ear clipping in the loop's mean plane, best (largest smallest angle)
 // ear first, through the same checks as the assembly.
 std::size_t close_holes(Assembly& as, const std::vector<Vector3d>& pts,
-                        const std::vector<Vector3d>& normals, int max_edges) {
+                        const std::vector<Vector3d>& normals, int max_edges, double max_edge) {
   const auto& faces = as.faces();
   // read-only scan in parallel (flags per face side), collected in face order
   std::vector<std::uint8_t> open_side(faces.size(), 0);
@@ -839,6 +978,10 @@ std::size_t close_holes(Assembly& as, const std::vector<Vector3d>& pts,
       h = static_cast<std::size_t>(nh);
     }
     if (!ok || loop.size() < 3) continue;
+    if (const std::size_t n_fill = fill_loop_max_min_angle(as, pts, loop, max_edge)) {
+      added += n_fill;
+      continue;
+    }
     // The fill faces traverse the loop backwards: ear at i is (loop[i+1], loop[i], loop[i-1]).
     while (loop.size() >= 3) {
       const std::size_t m = loop.size();
@@ -873,6 +1016,7 @@ std::size_t close_holes(Assembly& as, const std::vector<Vector3d>& pts,
       bool clipped = false;
       for (const auto& [q, i] : ears) {
         const std::array<int, 3> t{loop[(i + 1) % m], loop[i], loop[(i + m - 1) % m]};
+        if ((pts[t[0]] - pts[t[2]]).norm() > max_edge) continue;  // the user's edge limit
         if (!as.try_add(t, true)) continue;
         ++added;
         loop.erase(loop.begin() + static_cast<std::ptrdiff_t>(i));
@@ -1145,8 +1289,11 @@ FanResult build_fans_impl(const std::vector<Vector3d>& input, const FanOptions& 
   fans.clear();
   fans.shrink_to_fit();
   if (options.max_hole_edges >= 3)
-    st.hole_triangles = close_holes(as, points, ctx.normals, options.max_hole_edges);
+    st.hole_triangles = close_holes(as, points, ctx.normals, options.max_hole_edges,
+                                    options.max_edge > 0 ? options.max_edge
+                                                         : std::numeric_limits<double>::infinity());
   st.inserted_points = insert_unused(as, ctx);
+  st.delaunay_flips = flip_to_delaunay(as, points);
   st.bowtie_faces_removed = detach_bowties(as, n);
 
   Mesh& mesh = result.mesh;

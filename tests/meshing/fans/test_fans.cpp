@@ -206,7 +206,14 @@ TEST(FansHead, SimulatedHeadMeshIsCloseToGroundTruth) {
   ASSERT_EQ(res.mesh.positions, pts) << "vertices are the input points";
   const MeshCheckReport r = check_mesh(res.mesh);
   SCOPED_TRACE(r.to_text());
+  // A triangulated disc has ~2 faces per point; the scan's holes and rims take a little off
+  // (measured 1.99). An empty or half mesh must fail here, not pass the checks below.
+  EXPECT_GT(double(r.faces), 1.9 * double(pts.size()));
+  EXPECT_EQ(r.topology.unreferenced_vertices, 0u);
   EXPECT_EQ(r.topology.nonmanifold_edges, 0u);
+  EXPECT_EQ(r.nonmanifold_vertices, 0u);
+  EXPECT_EQ(r.self_intersections, 0u);
+  EXPECT_EQ(r.topology.inconsistent_edges, 0u);
   EXPECT_EQ(r.duplicate_faces, 0u);
   // Hausdorff distance, approximated on samples: mesh -> truth over vertices, edge midpoints
   // and centroids against the exact truth points; truth -> mesh over truth points against the

@@ -31,7 +31,7 @@ struct FanOptions {
   double max_edge_factor = 0.0;  //!< limit = factor x local spacing (nearest-neighbour
                                  //!< distance of the fan centre), like GP3's mu; 0: off
   double max_normal_angle_deg = 0.0;  //!< reject neighbours whose normal deviates more; 0: off
-  int max_hole_edges = 12;   //!< close holes left by disagreeing fans up to this length; 0: off
+  int max_hole_edges = 24;   //!< close holes left by disagreeing fans up to this length; 0: off
   bool pca_normals = false;  //!< PCA normals for every point instead of the 3-NN plane
   //! Orient every normal away from the z axis instead of propagating one orientation over the
   //! neighbour graph: right for clouds from a turntable scan (a RangeGrid's cells), whose
@@ -56,7 +56,9 @@ struct FanStats {
   std::size_t bowtie_faces_removed = 0;  //!< faces taken off a vertex whose faces formed
                                          //!< several wedges that nothing could join
   std::size_t hole_triangles = 0;      //!< added by hole closing
-  std::size_t inserted_points = 0;     //!< unused points inserted by a 1-to-3 split
+  std::size_t inserted_points = 0;     //!< unused points inserted by a 1-to-3 split or
+                                       //!< attached to the boundary
+  std::size_t delaunay_flips = 0;      //!< edges flipped towards the Delaunay condition
   std::size_t unused_points = 0;       //!< points in no triangle at the end
   double seconds_normals = 0, seconds_fans = 0, seconds_assembly = 0;
 };
