@@ -1,21 +1,68 @@
 // Subcommands of the point-cloud fan mesher (seed 002): fans, and the shared mesh checker.
-#include <iomanip>
-#include <iostream>
-
 #include <algorithm>
 #include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <nlohmann/json.hpp>
 
 #include "cli_support.h"
 #include "commands.h"
 #include "pipeline.h"
+#include "scanmesh/core/atomic_file.h"
 #include "scanmesh/core/errors.h"
 #include "scanmesh/core/image.h"
 #include "scanmesh/core/mesh_io.h"
-#include "scanmesh/meshing/fans/fans.h"
 #include "scanmesh/core/point_cloud_io.h"
+#include "scanmesh/meshing/fans/fans.h"
 #include "scanmesh/meshing/mesh_check.h"
 
 namespace scanmesh::cli {
+
+namespace {
+
+// What was meshed, how the stages went and the checker's verdicts (docs/formats.md).
+nlohmann::json fans_report_json(const std::string& input, const PointCloud& cloud,
+                                const FanResult& r, const MeshCheckReport& check) {
+  const FanStats& s = r.stats;
+  nlohmann::json verdicts;
+  for (const PropertyVerdict& v : mesh_verdicts(check))
+    verdicts[property_name(v.property)] = v.known ? nlohmann::json(v.holds) : nlohmann::json();
+  return {
+      {"input", input},
+      {"points", s.points},
+      {"input_colours", cloud.has_colors()},
+      {"input_normals", cloud.has_normals()},
+      {"triangles", r.mesh.face_count()},
+      {"seconds", {{"normals", s.seconds_normals},
+                   {"fans", s.seconds_fans},
+                   {"assembly", s.seconds_assembly}}},
+      {"fans", {{"cell_edge", s.cell_edge},
+                {"pca_fallbacks", s.pca_fallbacks},
+                {"open_fans", s.open_fans},
+                {"candidates", s.proposed_triangles},
+                {"unused_candidates", s.rejected_triangles}}},
+      {"surface_growth", {{"seeds", s.seeds},
+                          {"glued_triangles", s.glued_triangles},
+                          {"glues_taken_back", s.unzipped_glues},
+                          {"hole_triangles", s.hole_triangles},
+                          {"inserted_points", s.inserted_points},
+                          {"delaunay_flips", s.delaunay_flips},
+                          {"bowtie_faces_removed", s.bowtie_faces_removed},
+                          {"unused_points", s.unused_points}}},
+      {"check", {{"nonmanifold_vertices", check.nonmanifold_vertices},
+                 {"nonmanifold_edges", check.topology.nonmanifold_edges},
+                 {"self_intersections", check.self_intersections},
+                 {"boundary_loops", check.topology.boundary_loops},
+                 {"components", check.topology.components},
+                 {"euler_characteristic", check.topology.euler_characteristic},
+                 {"genus", check.topology.genus()},
+                 {"min_angle_deg", check.min_angle_deg},
+                 {"fraction_min_angle_ge_30", check.fraction_min_angle_ge_30},
+                 {"verdicts", verdicts}}},
+  };
+}
+
+}  // namespace
 
 int run_fans(const FansArgs& args) {
   args.options.validate();
@@ -32,25 +79,34 @@ int run_fans(const FansArgs& args) {
                             "distinct points spread over a surface)");
   }
   const FanStats& s = result.stats;
-  write_ply(args.out, result.mesh);
-  if (!args.render_png.empty()) write_png(args.render_png, render_views(result.mesh));
+  const bool need_check = !args.histogram_png.empty() || args.check || !args.report.empty();
+  const MeshCheckReport report = need_check ? check_mesh(result.mesh) : MeshCheckReport{};
+  // The mesh, its pictures and its report appear together or not at all.
+  StagedFiles outputs;
+  write_ply(outputs.stage(args.out), result.mesh);
+  if (!args.render_png.empty())
+    write_png(outputs.stage(args.render_png), render_views(result.mesh));
+  if (!args.histogram_png.empty())
+    write_quality_histogram_png(outputs.stage(args.histogram_png), report);
+  if (!args.report.empty())
+    write_file_atomically(outputs.stage(args.report),
+                          fans_report_json(args.cloud, cloud, result, report).dump(2) + "\n");
+  outputs.commit();
   std::cout << std::fixed << std::setprecision(3) << "fans: " << s.points << " points -> "
             << result.mesh.face_count() << " triangles in "
             << s.seconds_normals + s.seconds_fans + s.seconds_assembly << " s (normals "
             << s.seconds_normals << ", fans " << s.seconds_fans << ", assembly "
             << s.seconds_assembly << ")\n"
             << "  cell edge " << s.cell_edge << ", PCA fallbacks " << s.pca_fallbacks
-            << ", open fans " << s.open_fans << ", rejected triangles " << s.rejected_triangles
+            << ", open fans " << s.open_fans << ", unused candidates " << s.rejected_triangles
             << ", hole triangles " << s.hole_triangles << ", inserted points " << s.inserted_points
             << ", unused points " << s.unused_points << "\n"
             << "  surface growth: " << s.seeds << " seeds, " << s.glued_triangles
-            << " glued triangles, " << s.bowtie_faces_removed << " faces off bow-ties\n";
+            << " glued triangles, " << s.unzipped_glues << " glues taken back, "
+            << s.delaunay_flips << " Delaunay flips, " << s.bowtie_faces_removed
+            << " faces off bow-ties\n";
   std::cout.unsetf(std::ios::floatfield);
-  if (!args.histogram_png.empty() || args.check) {
-    const MeshCheckReport report = check_mesh(result.mesh);
-    if (args.check) std::cout << report.to_text();
-    if (!args.histogram_png.empty()) write_quality_histogram_png(args.histogram_png, report);
-  }
+  if (args.check) std::cout << report.to_text();
   std::cout << "wrote " << args.out << "\n";
   return kSuccess;
 }

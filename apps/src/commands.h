@@ -114,6 +114,7 @@ struct FansArgs {
   std::string cloud;  //!< .ply, .pcd, .xyz/.txt/.pts or .smg (valid cells)
   std::string out;
   std::string render_png, histogram_png;
+  std::string report;  //!< JSON: stage statistics and the checker's verdicts
   bool check = false;  //!< print the checker report of the result
   FanOptions options;
 };

@@ -145,6 +145,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   fans_cmd->add_option("--render", fans.render_png, "Shaded picture of the mesh (PNG)");
   fans_cmd->add_option("--histogram", fans.histogram_png, "Min-angle histogram (PNG)");
+  fans_cmd->add_option("--report", fans.report,
+                       "JSON report: stage statistics, topology and the checker's verdicts");
   fans_cmd->add_flag("--check", fans.check, "Print the mesh checker's report");
 
   CheckArgs check;

@@ -16,6 +16,7 @@
 #include "cli_runner.h"
 #include "scanmesh/core/grid_file.h"
 #include "scanmesh/core/image.h"
+#include "scanmesh/core/mesh_io.h"
 
 namespace scanmesh {
 namespace {
@@ -247,6 +248,36 @@ TEST(Cli, FansMeshAnXyzCloudAndCheckFindsItClosedAndManifold) {
   EXPECT_EQ(r.exit_code, 4) << r.output;
   EXPECT_NE(r.output.find("broken.xyz"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir / "x.ply"));
+}
+
+// A coloured cloud (x y z r g b a): the mesh keeps the colours, and the report gives the
+// checker's verdicts, which the user can trust without running `check`.
+TEST(Cli, FansCarryColoursAndReportVerdicts) {
+  const fs::path dir = scratch_dir("fans_colour");
+  {
+    std::ofstream xyz(dir / "sphere.xyz");
+    for (int k = 0; k < 2000; ++k) {
+      const double z = -1.0 + 2.0 * (k + 0.5) / 2000.0, a = 2.399963229728653 * k;
+      xyz << 30 * std::sqrt(1 - z * z) * std::cos(a) << " " << 30 * std::sqrt(1 - z * z) * std::sin(a)
+          << " " << 30 * z << " " << (k % 256) << " 40 " << (255 - k % 256) << " 255\n";
+    }
+  }
+  const RunResult r = run("fans " + (dir / "sphere.xyz").string() + " --out " +
+                          (dir / "m.ply").string() + " --report " + (dir / "r.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream in(dir / "r.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_TRUE(j["input_colours"].get<bool>());
+  EXPECT_EQ(j["points"], 2000);
+  EXPECT_TRUE(j["check"]["verdicts"]["closed"].get<bool>());
+  EXPECT_TRUE(j["check"]["verdicts"]["vertex-manifold"].get<bool>());
+  EXPECT_EQ(j["check"]["genus"], 0);
+  EXPECT_EQ(j["surface_growth"]["bowtie_faces_removed"], 0);
+  const Mesh m = read_ply(dir / "m.ply");
+  ASSERT_EQ(m.colors.size(), 2000u);
+  EXPECT_EQ(m.colors[300].r, 300 % 256);
+  EXPECT_EQ(m.colors[300].g, 40);
+  EXPECT_EQ(m.colors[300].b, 255 - 300 % 256);
 }
 
 TEST(Cli, ParticlesMeshASphereSceneIntoAClosedMesh) {

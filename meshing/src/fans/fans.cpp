@@ -1285,6 +1285,7 @@ FanResult build_fans_impl(const std::vector<Vector3d>& input, const FanOptions& 
   growth.grow();
   st.seeds = growth.seeds();
   st.glued_triangles = growth.glued();
+  st.unzipped_glues = growth.unzipped();
   st.rejected_triangles = growth.unused_candidates();
   fans.clear();
   fans.shrink_to_fit();

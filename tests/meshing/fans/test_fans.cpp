@@ -9,6 +9,7 @@
 
 #include "fan_test_clouds.h"
 #include "scanmesh/core/errors.h"
+#include "scanmesh/core/point_cloud_io.h"
 #include "scanmesh/meshing/fans/fans.h"
 #include "scanmesh/meshing/mesh_check.h"
 #include "scanmesh/sim/range_scanner.h"
@@ -238,6 +239,39 @@ TEST(FansHead, SimulatedHeadMeshIsCloseToGroundTruth) {
 
 namespace scanmesh {
 namespace {
+
+// The cloud's colours and normals become the mesh's; the given normals decide the outside, so
+// inward normals turn every face inward (the faces follow what the user's data says).
+TEST(Fans, CarriesColoursAndGivenNormalsToTheMesh) {
+  PointCloud cloud;
+  cloud.positions = test::random_sphere(3000, 7);
+  for (const auto& p : cloud.positions) {
+    cloud.colors.push_back({static_cast<std::uint8_t>(128 + 127 * p.x()),
+                            static_cast<std::uint8_t>(128 + 127 * p.y()),
+                            static_cast<std::uint8_t>(128 + 127 * p.z())});
+    cloud.normals.push_back(-p.cast<float>());  // inward
+  }
+  // An organised cloud's missing pixel: dropped before meshing, with its attributes.
+  cloud.positions.insert(cloud.positions.begin() + 10, Eigen::Vector3d::Constant(NAN));
+  cloud.colors.insert(cloud.colors.begin() + 10, Rgb8{1, 2, 3});
+  cloud.normals.insert(cloud.normals.begin() + 10, Eigen::Vector3f::UnitX());
+  const FanResult r = build_fans(cloud);
+  const PointCloud finite = cloud.finite_points();
+  ASSERT_EQ(r.mesh.positions, finite.positions);
+  ASSERT_EQ(r.mesh.colors.size(), finite.size());
+  for (std::size_t i = 0; i < finite.size(); ++i) {
+    EXPECT_EQ(r.mesh.colors[i].r, finite.colors[i].r);
+    EXPECT_EQ(r.mesh.colors[i].b, finite.colors[i].b);
+    EXPECT_EQ(r.mesh.normals[i], finite.normals[i]);
+  }
+  std::size_t inward = 0;
+  const auto& P = r.mesh.positions;
+  for (const auto& t : r.mesh.triangles)
+    inward += (P[t[1]] - P[t[0]]).cross(P[t[2]] - P[t[0]]).dot(P[t[0]]) < 0;
+  EXPECT_EQ(inward, r.mesh.face_count());
+  EXPECT_EQ(check_mesh(r.mesh).topology.boundary_loops, 0u);
+}
+
 
 // With the scan's hair on, the neighbour graph breaks into pieces and propagated orientation
 // can flip whole regions; orienting away from the turntable axis keeps every face outward.

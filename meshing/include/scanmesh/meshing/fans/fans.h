@@ -53,6 +53,7 @@ struct FanStats {
   std::size_t rejected_triangles = 0;  //!< candidates the surface growth never used
   std::size_t seeds = 0;               //!< fronts the surface growth started
   std::size_t glued_triangles = 0;     //!< joined two fronts at a vertex (then zipped)
+  std::size_t unzipped_glues = 0;      //!< glues taken back: the fronts did not zip from them
   std::size_t bowtie_faces_removed = 0;  //!< faces taken off a vertex whose faces formed
                                          //!< several wedges that nothing could join
   std::size_t hole_triangles = 0;      //!< added by hole closing
