@@ -434,6 +434,34 @@ class Assembly {
       }
     }
   }
+  // Edge-connected groups ("wedges") of the faces around v: label[i] is the group of star[v][i]
+  // (the index of one of its faces); returns the number of groups (1: a manifold vertex).
+  int wedge_labels(int v, std::vector<int>& label) const {
+    const auto& star = star_[v];
+    label.resize(star.size());
+    for (std::size_t i = 0; i < star.size(); ++i) label[i] = static_cast<int>(i);
+    auto find = [&](int i) {
+      while (label[i] != i) i = label[i] = label[label[i]];
+      return i;
+    };
+    int groups = static_cast<int>(star.size());
+    for (std::size_t i = 0; i < star.size(); ++i)
+      for (std::size_t j = i + 1; j < star.size(); ++j) {
+        const auto& a = faces_[star[i]];
+        const auto& b = faces_[star[j]];
+        bool shared = false;
+        for (int x : a)
+          if (x != v && (x == b[0] || x == b[1] || x == b[2])) shared = true;
+        const int ri = find(static_cast<int>(i)), rj = find(static_cast<int>(j));
+        if (shared && ri != rj) {
+          label[ri] = rj;
+          --groups;
+        }
+      }
+    for (std::size_t i = 0; i < star.size(); ++i) label[i] = find(static_cast<int>(i));
+    return groups;
+  }
+
   bool on_boundary(int a) const {
     bool open = false;
     boundary_half_edges_at(a, [&](int, int) { open = true; });
@@ -634,30 +662,9 @@ class SurfaceGrowth {
 
   bool has_faces(int v) const { return !as_.star()[v].empty(); }
 
-  // Edge-connected groups of faces around v (1 for a manifold vertex).
   int wedges_at(int v) const {
-    const auto& star = as_.star()[v];
-    std::vector<int> label(star.size());
-    for (std::size_t i = 0; i < star.size(); ++i) label[i] = static_cast<int>(i);
-    auto find = [&](int i) {
-      while (label[i] != i) i = label[i] = label[label[i]];
-      return i;
-    };
-    int groups = static_cast<int>(star.size());
-    for (std::size_t i = 0; i < star.size(); ++i)
-      for (std::size_t j = i + 1; j < star.size(); ++j) {
-        const auto& a = as_.faces()[star[i]];
-        const auto& b = as_.faces()[star[j]];
-        bool shared = false;
-        for (int x : a)
-          if (x != v && (x == b[0] || x == b[1] || x == b[2])) shared = true;
-        const int ri = find(static_cast<int>(i)), rj = find(static_cast<int>(j));
-        if (shared && ri != rj) {
-          label[ri] = rj;
-          --groups;
-        }
-      }
-    return groups;
+    std::vector<int> label;
+    return as_.wedge_labels(v, label);
   }
 
   void drain(bool glue) {
@@ -761,28 +768,12 @@ std::size_t detach_bowties(Assembly& as, int n) {
     const int v = work.back();
     work.pop_back();
     const std::vector<int> star = as.star()[v];
-    if (star.size() < 2) continue;
-    // union-find over the faces of the star: faces sharing an edge at v are one wedge
-    label.assign(star.size(), 0);
-    for (std::size_t i = 0; i < star.size(); ++i) label[i] = static_cast<int>(i);
-    auto find = [&](int i) {
-      while (label[i] != i) i = label[i] = label[label[i]];
-      return i;
-    };
-    for (std::size_t i = 0; i < star.size(); ++i)
-      for (std::size_t j = i + 1; j < star.size(); ++j) {
-        const auto& a = as.faces()[star[i]];
-        const auto& b = as.faces()[star[j]];
-        int shared = 0;
-        for (int x : a)
-          if (x != v && (x == b[0] || x == b[1] || x == b[2])) ++shared;
-        if (shared > 0) label[find(static_cast<int>(i))] = find(static_cast<int>(j));
-      }
+    if (star.size() < 2 || as.wedge_labels(v, label) < 2) continue;
     std::vector<int> size(star.size(), 0);
-    for (std::size_t i = 0; i < star.size(); ++i) ++size[find(static_cast<int>(i))];
+    for (std::size_t i = 0; i < star.size(); ++i) ++size[label[i]];
     const int keep = static_cast<int>(std::max_element(size.begin(), size.end()) - size.begin());
     for (std::size_t i = 0; i < star.size(); ++i) {
-      if (find(static_cast<int>(i)) == keep) continue;
+      if (label[i] == keep) continue;
       const auto t = as.faces()[star[i]];
       as.remove(star[i]);
       ++removed;

@@ -18,7 +18,7 @@ struct TopologyStats {
   std::vector<std::size_t> boundary_loop_lengths;  //!< in edges, longest first
   std::size_t unreferenced_vertices = 0;
   long long euler_characteristic = 0;  //!< V - E + F over referenced vertices
-  std::size_t components = 0;          //!< edge-connected groups of faces
+  std::size_t components = 0;          //!< groups of faces joined through shared vertices
   //! Handles, from chi = 2 components - 2 genus - loops; meaningful for a manifold, oriented
   //! mesh (the checker prints it only then).
   long long genus() const {

@@ -7,9 +7,12 @@
 //   -> one fan per point (§3.6 steps 1-6): nearest-first candidate insertion, distance-preserving
 //      rotation into the tangent plane, checks 4a-4c (Satz 3.3.3 in-circle test), completeness
 //      angle alpha with radius growth up to d_max, spoke flips (7c, Satz 3.3.6)
-//   -> assembly aware of the fans already merged (4a, 7a radar sweep, 7b rim closing, step 9):
-//      no duplicate triangle, no edge with more than two faces, no overlapping triangles
-//   -> closing of the small holes left where neighbouring fans disagree.
+//   -> assembly (4a, 7a radar sweep, 7b rim closing, step 9) as a surface growth: the fan
+//      triangles are voted candidates, the mesh grows across its boundary edges, best-voted
+//      first, with no duplicate triangle, no edge with more than two faces, no overlapping
+//      triangles and every vertex one fan of faces (vertex-manifold output)
+//   -> closing of the small holes left where neighbouring fans disagree, flips towards the
+//      Delaunay condition between nearly coplanar faces.
 // The input points are the output vertices, in input order.
 #pragma once
 
