@@ -57,9 +57,23 @@ class CellGrid {
     const auto a = coord(c - Eigen::Vector3d::Constant(r));
     const auto b = coord(c + Eigen::Vector3d::Constant(r));
     const double r2 = r * r;
-    for (int z = a[2]; z <= b[2]; ++z)
-      for (int y = a[1]; y <= b[1]; ++y)
+    // Cells of the bounding cube that the ball misses are skipped (about half of a large
+    // cube); the slack absorbs the rounding of a point's cell index near a cell face.
+    const double slack = 1e-7 * cell_;
+    auto gap2 = [&](int axis, int i) {
+      const double lo = lo_[axis] + i * cell_, hi = lo + cell_;
+      const double g = std::max({lo - c[axis], c[axis] - hi, 0.0});
+      const double gs = std::max(0.0, g - slack);
+      return gs * gs;
+    };
+    for (int z = a[2]; z <= b[2]; ++z) {
+      const double gz = gap2(2, z);
+      if (gz > r2) continue;
+      for (int y = a[1]; y <= b[1]; ++y) {
+        const double gzy = gz + gap2(1, y);
+        if (gzy > r2) continue;
         for (int x = a[0]; x <= b[0]; ++x) {
+          if (gzy + gap2(0, x) > r2) continue;
           const std::size_t cell = flat(x, y, z);
           for (std::size_t k = start_[cell]; k < start_[cell + 1]; ++k) {
             const int i = order_[k];
@@ -67,6 +81,8 @@ class CellGrid {
             if (d2 <= r2) f(i, d2);
           }
         }
+      }
+    }
   }
 
   //! The K nearest other points of point i, nearest first, as (squared distance, index).

@@ -242,6 +242,7 @@ class FanBuilder {
     const auto& pts = ctx_.pts;
     const Frame frame(normal);
     fan_.clear();
+    circles_fresh_ = false;
     const double limit = edge_limit(ctx_, c);
     const double cos_normal = ctx_.opt.max_normal_angle_deg > 0
                                   ? std::cos(ctx_.opt.max_normal_angle_deg * kPi / 180.0)
@@ -332,6 +333,7 @@ class FanBuilder {
   void insert_candidate(int id, const Vector3d& v, const Frame& frame) {
     Vector2d q;
     if (!frame.rotate(v, ctx_.eps_len, q)) return;  // 4b: image on c
+    if (surely_rejected(q)) return;
     for (const auto& s : fan_)
       if (s.id == id) return;  // 4a
     const double ang = wrap_angle(std::atan2(q.y(), q.x()));
@@ -357,6 +359,40 @@ class FanBuilder {
       }
     }
     fan_.insert(fan_.begin() + static_cast<std::ptrdiff_t>(pos), Spoke{id, ang, q});
+    circles_fresh_ = false;
+  }
+
+  // A cheap necessary condition for 4b/4c to accept q, without its angle (most candidates of
+  // the later rounds fail 4c; atan2 and the cosines were most of the fan stage): q lies in the
+  // circumcircle of some sector (c, a, b) (a point in the triangle does too). Fans with an
+  // open or nearly straight sector, or fewer than two spokes, are not filtered, and a margin
+  // leaves borderline points to the exact test, so the fans are the same as without it.
+  bool surely_rejected(const Vector2d& q) {
+    if (!circles_fresh_) refresh_circles();
+    if (!filter_) return false;
+    for (const auto& [centre, r2] : circles_)
+      if ((q - centre).squaredNorm() <= r2 * (1.0 + 1e-6)) return false;
+    return true;
+  }
+  void refresh_circles() {
+    circles_fresh_ = true;
+    circles_.clear();
+    const std::size_t m = fan_.size();
+    filter_ = m >= 2;
+    for (std::size_t i = 0; i < m && filter_; ++i) {
+      const Vector2d& a = fan_[i].q;
+      const Vector2d& b = fan_[(i + 1) % m].q;
+      const double cr = cross2(a, b);  // |a| |b| sin(gap): the sector is convex when > 0
+      if (!(cr > 1e-3 * a.norm() * b.norm())) {
+        filter_ = false;
+        break;
+      }
+      // circle through 0, a and b: 2 o.a = |a|^2, 2 o.b = |b|^2
+      const Vector2d o(a.squaredNorm() * b.y() - b.squaredNorm() * a.y(),
+                       b.squaredNorm() * a.x() - a.squaredNorm() * b.x());
+      const Vector2d centre = o / (2.0 * cr);
+      circles_.emplace_back(centre, centre.squaredNorm());
+    }
   }
 
   // Step 7c (Satz 3.3.6): remove spoke c-r when the two angles facing it sum to more than
@@ -387,6 +423,54 @@ class FanBuilder {
   const Context& ctx_;
   std::vector<Spoke> fan_;
   std::vector<std::pair<double, int>> cand_;
+  std::vector<std::pair<Vector2d, double>> circles_;  // per sector: centre, squared radius
+  bool circles_fresh_ = false, filter_ = false;
+};
+
+// One face at a vertex v: the face and its two other corners in face order (v, next, prev).
+// Keeping the corners here answers every edge query at v (does v -> w exist? which face?)
+// without looking up the faces themselves.
+struct Corner {
+  int face, next, prev;
+};
+
+// The faces around one vertex. Most stars hold at most kInline faces, kept in place (no heap
+// block per vertex: the growth looks at stars all the time).
+class FaceStar {
+ public:
+  static constexpr int kInline = 9;
+  const Corner* begin() const { return size_ <= kInline ? inline_.data() : more_.data(); }
+  const Corner* end() const { return begin() + size_; }
+  std::size_t size() const { return static_cast<std::size_t>(size_); }
+  bool empty() const { return size_ == 0; }
+  const Corner& operator[](std::size_t i) const { return begin()[i]; }
+  void push_back(const Corner& c) {
+    if (size_ < kInline) {
+      inline_[size_++] = c;
+      return;
+    }
+    if (size_ == kInline) more_.assign(inline_.begin(), inline_.end());
+    more_.push_back(c);
+    ++size_;
+  }
+  void erase(int face) {  // keeps the order
+    Corner* data = size_ <= kInline ? inline_.data() : more_.data();
+    Corner* last = std::remove_if(data, data + size_, [face](const Corner& c) { return c.face == face; });
+    const int kept = static_cast<int>(last - data);
+    if (size_ > kInline) {
+      more_.resize(kept);
+      if (kept <= kInline) {
+        std::copy(more_.begin(), more_.end(), inline_.begin());
+        more_.clear();
+      }
+    }
+    size_ = kept;
+  }
+
+ private:
+  int size_ = 0;
+  std::array<Corner, kInline> inline_{};
+  std::vector<Corner> more_;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -401,37 +485,37 @@ class Assembly {
 
   const std::vector<std::array<int, 3>>& faces() const { return faces_; }
   const std::vector<std::uint8_t>& alive() const { return alive_; }
-  const std::vector<std::vector<int>>& star() const { return star_; }
+  const std::vector<FaceStar>& star() const { return star_; }
 
   bool directed_edge_used(int u, int v) const {
-    for (int f : star_[u]) {
-      const auto& t = faces_[f];
-      for (int k = 0; k < 3; ++k)
-        if (t[k] == u && t[(k + 1) % 3] == v) return true;
-    }
+    for (const Corner& c : star_[u])
+      if (c.next == v) return true;
     return false;
   }
   bool edge_exists(int u, int v) const {
-    return directed_edge_used(u, v) || directed_edge_used(v, u);
+    for (const Corner& c : star_[u])
+      if (c.next == v || c.prev == v) return true;
+    return false;
   }
   // Third corner of the face with the directed edge u -> v, or -1.
   int third_vertex(int u, int v) const {
-    for (int f : star_[u]) {
-      const auto& t = faces_[f];
-      for (int k = 0; k < 3; ++k)
-        if (t[k] == u && t[(k + 1) % 3] == v) return t[(k + 2) % 3];
-    }
+    for (const Corner& c : star_[u])
+      if (c.next == v) return c.prev;
     return -1;
   }
-  // Calls visit(p, q) for every boundary half-edge p -> q (no face has q -> p) at vertex a.
+  // The face with the directed edge u -> v, or -1.
+  int face_with(int u, int v) const {
+    for (const Corner& c : star_[u])
+      if (c.next == v) return c.face;
+    return -1;
+  }
+  // Calls visit(p, q) for every boundary half-edge p -> q (no face has q -> p) at vertex a,
+  // face by face in star order (the edge leaving a before the edge entering it).
   template <class Visit>
   void boundary_half_edges_at(int a, Visit&& visit) const {
-    for (int f : star_[a]) {
-      const auto& t = faces_[f];
-      for (int k = 0; k < 3; ++k) {
-        const int p = t[k], q = t[(k + 1) % 3];
-        if ((p == a || q == a) && !directed_edge_used(q, p)) visit(p, q);
-      }
+    for (const Corner& c : star_[a]) {
+      if (!directed_edge_used(c.next, a)) visit(a, c.next);
+      if (!directed_edge_used(a, c.prev)) visit(c.prev, a);
     }
   }
   // Edge-connected groups ("wedges") of the faces around v: label[i] is the group of star[v][i]
@@ -447,11 +531,10 @@ class Assembly {
     int groups = static_cast<int>(star.size());
     for (std::size_t i = 0; i < star.size(); ++i)
       for (std::size_t j = i + 1; j < star.size(); ++j) {
-        const auto& a = faces_[star[i]];
-        const auto& b = faces_[star[j]];
-        bool shared = false;
-        for (int x : a)
-          if (x != v && (x == b[0] || x == b[1] || x == b[2])) shared = true;
+        const Corner& a = star[i];
+        const Corner& b = star[j];
+        const bool shared = a.next == b.next || a.next == b.prev || a.prev == b.next ||
+                            a.prev == b.prev;
         const int ri = find(static_cast<int>(i)), rj = find(static_cast<int>(j));
         if (shared && ri != rj) {
           label[ri] = rj;
@@ -482,14 +565,9 @@ class Assembly {
     const double longest =
         std::max({(B - A).squaredNorm(), (C - B).squaredNorm(), (A - C).squaredNorm()});
     if (!(nrm.norm() > eps_area_ * longest)) return false;  // degenerate
-    // 4a / step 9: duplicate (in either orientation).
-    for (int f : star_[t[0]]) {
-      auto s = faces_[f];
-      auto u = t;
-      std::sort(s.begin(), s.end());
-      std::sort(u.begin(), u.end());
-      if (s == u) return false;
-    }
+    // 4a / step 9: duplicate (in either orientation): a face at t[0] with t[1] and t[2].
+    for (const Corner& c : star_[t[0]])
+      if ((c.next == t[1] && c.prev == t[2]) || (c.next == t[2] && c.prev == t[1])) return false;
     for (int k = 0; k < 3; ++k)
       if (directed_edge_used(t[k], t[(k + 1) % 3])) return false;
     const bool skip = consensus && !in_3d && all_consensus_around(t);
@@ -500,8 +578,8 @@ class Assembly {
 
   bool all_consensus_around(const std::array<int, 3>& t) const {
     for (int v : t)
-      for (int f : star_[v])
-        if (!consensus_[f]) return false;
+      for (const Corner& c : star_[v])
+        if (!consensus_[c.face]) return false;
     return true;
   }
 
@@ -510,17 +588,17 @@ class Assembly {
     faces_.push_back(t);
     alive_.push_back(1);
     consensus_.push_back(consensus ? 1 : 0);
-    for (int v : t) star_[v].push_back(f);
+    for (int k = 0; k < 3; ++k) star_[t[k]].push_back({f, t[(k + 1) % 3], t[(k + 2) % 3]});
   }
   void remove(int f) {
     alive_[f] = 0;
-    for (int v : faces_[f]) std::erase(star_[v], f);
+    for (int v : faces_[f]) star_[v].erase(f);
   }
 
   bool intersects_star(const std::array<int, 3>& t) const {
     for (int v : t)
-      for (int f : star_[v])
-        if (triangles_intersect(pts_, t, faces_[f])) return true;
+      for (const Corner& c : star_[v])
+        if (triangles_intersect(pts_, t, faces_[c.face])) return true;
     return false;
   }
 
@@ -535,9 +613,9 @@ class Assembly {
     for (int k = 0; k < 3; ++k) scale = std::max(scale, (a[k] - a[(k + 1) % 3]).squaredNorm());
     const double tol = 1e-9 * std::sqrt(scale);  // x edge length = an area tolerance
     for (int v : t)
-      for (int f : star_[v]) {
+      for (const Corner& c : star_[v]) {
         std::array<Vector2d, 3> b;
-        const auto& s = faces_[f];
+        const auto& s = faces_[c.face];
         for (int k = 0; k < 3; ++k) b[k] = fr.project(pts_[s[k]] - o);
         if (overlap2d(a, b, tol)) return true;
       }
@@ -570,7 +648,7 @@ class Assembly {
   std::vector<std::array<int, 3>> faces_;
   std::vector<std::uint8_t> alive_;
   std::vector<std::uint8_t> consensus_;  // all three fans proposed the face
-  std::vector<std::vector<int>> star_;
+  std::vector<FaceStar> star_;
   double eps_area_;
 };
 
@@ -759,15 +837,27 @@ class SurfaceGrowth {
 // Faces around v split into edge-connected wedges; all but the largest leave v's star. Only
 // what the growth's glue steps left unzipped and hole closing could not join ends here; each
 // removed face is counted.
-std::size_t detach_bowties(Assembly& as, int n) {
+std::size_t detach_bowties(Assembly& as, int n, int threads) {
+  // Read-only pass in parallel: only vertices with several wedges start the work (a manifold
+  // vertex is a no-op below; one that loses faces later is pushed by that removal).
+  std::vector<std::uint8_t> bowtie(n, 0);
+#pragma omp parallel num_threads(threads)
+  {
+    std::vector<int> label;
+#pragma omp for schedule(dynamic, 4096)
+    for (int v = 0; v < n; ++v)
+      bowtie[v] = as.star()[v].size() >= 2 && as.wedge_labels(v, label) >= 2;
+  }
   std::size_t removed = 0;
-  std::vector<int> work(n);
-  for (int v = 0; v < n; ++v) work[v] = v;
+  std::vector<int> work;
+  for (int v = 0; v < n; ++v)
+    if (bowtie[v]) work.push_back(v);
   std::vector<int> label;
   while (!work.empty()) {
     const int v = work.back();
     work.pop_back();
-    const std::vector<int> star = as.star()[v];
+    std::vector<int> star;
+    for (const Corner& c : as.star()[v]) star.push_back(c.face);
     if (star.size() < 2 || as.wedge_labels(v, label) < 2) continue;
     std::vector<int> size(star.size(), 0);
     for (std::size_t i = 0; i < star.size(); ++i) ++size[label[i]];
@@ -790,7 +880,7 @@ std::size_t detach_bowties(Assembly& as, int n) {
 // not change shape) and the new faces pass the 3D intersection test. Where neighbouring fans
 // were built in different tangent planes the merged mesh is not Delaunay there; CGAL's
 // advancing front takes its faces from the 3D Delaunay triangulation. Returns the flips.
-std::size_t flip_to_delaunay(Assembly& as, const std::vector<Vector3d>& pts) {
+std::size_t flip_to_delaunay(Assembly& as, const std::vector<Vector3d>& pts, int threads) {
   const double cos_coplanar = std::cos(kFlipMaxDihedralDeg * kPi / 180.0);
   auto angle_at = [&](int o, int x, int y) {
     const Vector3d u = pts[x] - pts[o], v = pts[y] - pts[o];
@@ -802,26 +892,40 @@ std::size_t flip_to_delaunay(Assembly& as, const std::vector<Vector3d>& pts) {
   auto unit_normal = [&](int a, int b, int c) {
     return (pts[b] - pts[a]).cross(pts[c] - pts[a]).normalized();
   };
-  std::size_t flips = 0;
+  auto delaunay_across = [&](int a, int b, int c, int d) {
+    if (d < 0 || d == c) return true;
+    // two acute opposite angles sum to less than 180 deg: most edges end here, without atan2
+    if ((pts[a] - pts[c]).dot(pts[b] - pts[c]) > 0 && (pts[b] - pts[d]).dot(pts[a] - pts[d]) > 0)
+      return true;
+    return angle_at(c, a, b) + angle_at(d, b, a) <= kPi + 1e-9;
+  };
+  // Read-only pass in parallel: only faces with a non-Delaunay edge, and faces next to a flip,
+  // can flip (any other face would pass every test below unchanged).
   const std::size_t faces = as.faces().size();
+  std::vector<std::uint8_t> suspect(faces, 0);
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 4096)
+  for (std::ptrdiff_t f = 0; f < static_cast<std::ptrdiff_t>(faces); ++f) {
+    if (!as.alive()[f]) continue;
+    const auto& t = as.faces()[f];
+    for (int k = 0; k < 3; ++k) {
+      const int a = t[k], b = t[(k + 1) % 3], c = t[(k + 2) % 3];
+      if (!delaunay_across(a, b, c, as.third_vertex(b, a))) suspect[f] = 1;
+    }
+  }
+  std::size_t flips = 0;
   for (std::size_t f = 0; f < faces; ++f) {
+    if (!suspect[f]) continue;
     for (int k = 0; k < 3 && as.alive()[f]; ++k) {
       const auto t = as.faces()[f];
       const int a = t[k], b = t[(k + 1) % 3], c = t[(k + 2) % 3];
       const int d = as.third_vertex(b, a);
-      if (d < 0 || d == c) continue;
-      if (angle_at(c, a, b) + angle_at(d, b, a) <= kPi + 1e-9) continue;  // Delaunay already
+      if (delaunay_across(a, b, c, d)) continue;
       if (unit_normal(a, b, c).dot(unit_normal(b, a, d)) < cos_coplanar) continue;
       if (as.edge_exists(c, d)) continue;
       const double before = std::min(min_angle(a, b, c), min_angle(b, a, d));
       if (std::min(min_angle(c, a, d), min_angle(d, b, c)) <= before) continue;
       if (unit_normal(c, a, d).dot(unit_normal(d, b, c)) < cos_coplanar) continue;
-      int g = -1;
-      for (int h : as.star()[b])
-        if (as.faces()[h] == std::array<int, 3>{b, a, d} ||
-            as.faces()[h] == std::array<int, 3>{a, d, b} ||
-            as.faces()[h] == std::array<int, 3>{d, b, a})
-          g = h;
+      const int g = as.face_with(b, a);
       if (g < 0) continue;
       const auto tg = as.faces()[g];
       as.remove(static_cast<int>(f));
@@ -829,6 +933,9 @@ std::size_t flip_to_delaunay(Assembly& as, const std::vector<Vector3d>& pts) {
       const std::size_t first = as.faces().size();
       if (as.try_add({c, a, d}, true) && as.try_add({d, b, c}, true)) {
         ++flips;
+        for (int v : {a, b, c, d})
+          for (const Corner& h : as.star()[v])
+            if (static_cast<std::size_t>(h.face) < faces) suspect[h.face] = 1;
         break;  // f is gone
       }
       for (std::size_t h = first; h < as.faces().size(); ++h)
@@ -900,12 +1007,13 @@ std::size_t fill_loop_max_min_angle(Assembly& as, const std::vector<Vector3d>& p
 // `max_edges` edges, by ear clipping in the loop's mean plane, best (largest smallest angle)
 // ear first, through the same checks as the assembly.
 std::size_t close_holes(Assembly& as, const std::vector<Vector3d>& pts,
-                        const std::vector<Vector3d>& normals, int max_edges, double max_edge) {
+                        const std::vector<Vector3d>& normals, int max_edges, double max_edge,
+                        int threads) {
   const auto& faces = as.faces();
   // read-only scan in parallel (flags per face side), collected in face order
   std::vector<std::uint8_t> open_side(faces.size(), 0);
   const auto nf = static_cast<std::ptrdiff_t>(faces.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for num_threads(threads) schedule(static)
   for (std::ptrdiff_t f = 0; f < nf; ++f) {
     if (!as.alive()[f]) continue;
     for (int k = 0; k < 3; ++k)
@@ -1054,7 +1162,8 @@ std::size_t insert_unused(Assembly& as, const Context& ctx) {
     for (int k = 0; k < kNormalNeighbours; ++k) {
       const int j = ctx.knn[p * kNormalNeighbours + k];
       if (j < 0) continue;
-      for (int f : as.star()[j]) {
+      for (const Corner& corner : as.star()[j]) {
+        const int f = corner.face;
         const auto& t = as.faces()[f];
         const Vector3d nrm = (pts[t[1]] - pts[t[0]]).cross(pts[t[2]] - pts[t[0]]).normalized();
         const Frame fr(nrm);
@@ -1283,10 +1392,11 @@ FanResult build_fans_impl(const std::vector<Vector3d>& input, const FanOptions& 
   if (options.max_hole_edges >= 3)
     st.hole_triangles = close_holes(as, points, ctx.normals, options.max_hole_edges,
                                     options.max_edge > 0 ? options.max_edge
-                                                         : std::numeric_limits<double>::infinity());
+                                                         : std::numeric_limits<double>::infinity(),
+                                    omp_threads(options));
   st.inserted_points = insert_unused(as, ctx);
-  st.delaunay_flips = flip_to_delaunay(as, points);
-  st.bowtie_faces_removed = detach_bowties(as, n);
+  st.delaunay_flips = flip_to_delaunay(as, points, omp_threads(options));
+  st.bowtie_faces_removed = detach_bowties(as, n, omp_threads(options));
 
   Mesh& mesh = result.mesh;
   mesh.positions = input;
