@@ -89,15 +89,25 @@ class CellGrid {
   //! Ties are broken by index, so the result is deterministic.
   void knn(int i, int K, std::vector<std::pair<double, int>>& out) const {
     const Eigen::Vector3d& c = points_[i];
-    double r = 0.5 * cell_;
     const std::size_t want = std::min<std::size_t>(K, points_.size() - 1);
+    // First radius from the density of the point's own cell, taken as a patch of surface
+    // through it (K points on a disc of radius r), so that one visit usually suffices; the
+    // result is the same for any first radius, since the ball is grown until it holds K.
+    const auto cc = coord(c);
+    const std::size_t own = start_[flat(cc[0], cc[1], cc[2]) + 1] - start_[flat(cc[0], cc[1], cc[2])];
+    double r = cell_ * std::sqrt(static_cast<double>(K + 1) / (3.14159 * static_cast<double>(own)));
+    r = std::clamp(r * 1.15, 0.05 * cell_, 4.0 * cell_);
     while (true) {
       out.clear();
       visit_ball(c, r, [&](int j, double d2) {
         if (j != i) out.emplace_back(d2, j);
       });
       if (out.size() >= want || r > 1e3 * cell_ * (dims_[0] + dims_[1] + dims_[2])) break;
-      r *= 2.0;
+      // Too few: grow by the missing share of the disc area (at least 1.3x, at most 2x).
+      const double grow = out.empty() ? 2.0
+                                      : std::sqrt(static_cast<double>(want) /
+                                                  static_cast<double>(out.size())) * 1.15;
+      r *= std::clamp(grow, 1.3, 2.0);
     }
     const std::size_t keep = std::min(want, out.size());
     std::partial_sort(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(keep), out.end());

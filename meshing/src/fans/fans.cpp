@@ -274,12 +274,21 @@ class FanBuilder {
         }
       } else {
         const double dp2 = d_prev * d_prev;
+        // The acceptance region only shrinks as spokes are inserted (a circle through c, a and
+        // a point inside the circle of (c, a, b) stays inside that circle on the sector's side
+        // of c-a), so a point the circle pre-test rejects now is rejected whenever its turn
+        // comes: it is dropped here, before the sort, and the fan is the same.
+        const bool prefilter = !surely_rejected_off();
         ctx_.grid.visit_ball(pts[c], d, [&](int j, double d2) {
           if (j == c) return;
           if (d2 > dp2 ||
               (round == 1 && d2 <= r1_2 &&
-               std::find(first, first + kNormalNeighbours, j) == first + kNormalNeighbours))
+               std::find(first, first + kNormalNeighbours, j) == first + kNormalNeighbours)) {
+            Vector2d q;
+            if (prefilter && frame.rotate(pts[j] - pts[c], ctx_.eps_len, q) && surely_rejected(q))
+              return;
             cand_.emplace_back(d2, j);
+          }
         });
       }
       ++round;
@@ -373,6 +382,11 @@ class FanBuilder {
     for (const auto& [centre, r2] : circles_)
       if ((q - centre).squaredNorm() <= r2 * (1.0 + 1e-6)) return false;
     return true;
+  }
+  // True when the pre-test cannot reject anything for the current fan.
+  bool surely_rejected_off() {
+    if (!circles_fresh_) refresh_circles();
+    return !filter_;
   }
   void refresh_circles() {
     circles_fresh_ = true;
