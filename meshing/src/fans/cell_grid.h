@@ -93,9 +93,8 @@ class CellGrid {
     // First radius from the density of the point's own cell, taken as a patch of surface
     // through it (K points on a disc of radius r), so that one visit usually suffices; the
     // result is the same for any first radius, since the ball is grown until it holds K.
-    const auto cc = coord(c);
-    const std::size_t own = start_[flat(cc[0], cc[1], cc[2]) + 1] - start_[flat(cc[0], cc[1], cc[2])];
-    double r = cell_ * std::sqrt(static_cast<double>(K + 1) / (3.14159 * static_cast<double>(own)));
+    const double own = static_cast<double>(points_in_cell_of(c));  // >= 1: point i itself
+    double r = cell_ * std::sqrt(static_cast<double>(K + 1) / (kPi * own));
     r = std::clamp(r * 1.15, 0.05 * cell_, 4.0 * cell_);
     while (true) {
       out.clear();
@@ -115,6 +114,13 @@ class CellGrid {
   }
 
  private:
+  static constexpr double kPi = 3.14159265358979323846;
+
+  std::size_t points_in_cell_of(const Eigen::Vector3d& p) const {
+    const auto c = coord(p);
+    const std::size_t cell = flat(c[0], c[1], c[2]);
+    return start_[cell + 1] - start_[cell];
+  }
   std::array<int, 3> coord(const Eigen::Vector3d& p) const {
     std::array<int, 3> c{};
     for (int a = 0; a < 3; ++a) {

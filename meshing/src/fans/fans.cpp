@@ -278,7 +278,7 @@ class FanBuilder {
         // a point inside the circle of (c, a, b) stays inside that circle on the sector's side
         // of c-a), so a point the circle pre-test rejects now is rejected whenever its turn
         // comes: it is dropped here, before the sort, and the fan is the same.
-        const bool prefilter = !surely_rejected_off();
+        const bool prefilter = circle_pretest_active();
         ctx_.grid.visit_ball(pts[c], d, [&](int j, double d2) {
           if (j == c) return;
           if (d2 > dp2 ||
@@ -377,16 +377,15 @@ class FanBuilder {
   // open or nearly straight sector, or fewer than two spokes, are not filtered, and a margin
   // leaves borderline points to the exact test, so the fans are the same as without it.
   bool surely_rejected(const Vector2d& q) {
-    if (!circles_fresh_) refresh_circles();
-    if (!filter_) return false;
+    if (!circle_pretest_active()) return false;
     for (const auto& [centre, r2] : circles_)
       if ((q - centre).squaredNorm() <= r2 * (1.0 + 1e-6)) return false;
     return true;
   }
-  // True when the pre-test cannot reject anything for the current fan.
-  bool surely_rejected_off() {
+  // False when the pre-test cannot reject anything for the current fan.
+  bool circle_pretest_active() {
     if (!circles_fresh_) refresh_circles();
-    return !filter_;
+    return filter_;
   }
   void refresh_circles() {
     circles_fresh_ = true;
