@@ -1,4 +1,6 @@
 // Subcommands that produce or inspect range grids: sim, info, export, clean.
+#include <algorithm>
+#include <cctype>
 #include <iostream>
 
 #include "commands.h"
@@ -32,14 +34,18 @@ nlohmann::json describe(const std::filesystem::path& file) {
     j["kind"] = "range grid";
     return j;
   }
-  if (file.extension() == ".ply") {
-    nlohmann::json j = mesh_summary(read_ply(file));
+  std::string ext = file.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == ".ply" || ext == ".off" || ext == ".obj" || ext == ".stl") {
+    nlohmann::json j = mesh_summary(read_mesh(file));
     j["kind"] = "mesh";
     return j;
   }
   if (!std::filesystem::exists(file))
     throw IoError("cannot open " + file.string() + ": no such file");
-  throw FileFormatError(file, "neither a scanmesh grid file (.smg) nor a PLY mesh");
+  throw FileFormatError(file,
+                        "neither a scanmesh grid file (.smg) nor a mesh (.ply .off .obj .stl)");
 }
 
 void print_text(const nlohmann::json& j, const std::string& indent = "") {

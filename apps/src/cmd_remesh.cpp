@@ -6,10 +6,13 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <optional>
+#include <sstream>
 
 #include "cli_support.h"
 #include "commands.h"
 #include "scanmesh/core/atomic_file.h"
+#include "scanmesh/core/errors.h"
 #include "scanmesh/core/image.h"
 #include "scanmesh/core/mesh_io.h"
 #include "scanmesh/meshing/mesh_topology.h"
@@ -27,59 +30,91 @@ struct RemeshArgs {
   std::string features;  // file, "auto" or empty
   double sharp_deg = 60.0;
   double kink_deg = 60.0, kink_reach = 0.0;
-  double gamma = 3.0;
+  double gamma = 0.5;
   int filter = 10;
   double clip = 4.0;
+  double curvature_radius = -1, gradation = 0.3;
   bool uniform = false;
   std::string scheme = "regularize";
   double theta_dist = 90.0, theta_glatt = 60.0;
   bool no_intersections = false;
-  int min_component = 0, fill_holes = 0;
-  double needle_angle = 0;
+  // The scan clean-up: auto (when the input looks like a scan), forced or off; each explicit
+  // clean-up option overrides what auto chose.
+  bool force_prepare = false, no_prepare = false;
+  std::optional<int> min_component, fill_holes;
+  std::optional<double> needle_angle, tip_angle;
   bool remove_spikes = false;
-  double tip_angle = 120.0;
   bool queue = false;
   bool allow_local_intersections = false;
   int polish_rounds = 3;
   double polish_angle = 30.0;
   int polish_flip_cost = 2;
+  double polish_floor = 30.0;
   bool write_prepared = false;
 };
+
+remeshing::PrepareOptions choose_prepare(const Mesh& raw, const RemeshArgs& a) {
+  using namespace remeshing;
+  PrepareOptions po;
+  const bool scan = looks_like_scan(raw);
+  if (!a.no_prepare && (a.force_prepare || scan)) {
+    po = scan_prepare_options(raw, a.vertices);
+    const TopologyStats ts = topology_stats(raw);
+    std::cout << "prepare: " << (scan ? "the input looks like a scan" : "asked for") << " ("
+              << ts.boundary_loops << " boundary loops, " << ts.components
+              << " components): scan clean-up at the output's edge length "
+              << po.tip_reach_mm << " mm (--no-prepare to skip)\n";
+  }
+  if (a.min_component) po.min_component_faces = *a.min_component;
+  if (a.fill_holes) po.max_hole_edges = *a.fill_holes;
+  if (a.needle_angle) po.needle_angle_deg = *a.needle_angle;
+  if (a.remove_spikes && !po.remove_spikes) {
+    po.remove_spikes = true;
+    po.tip_reach_mm = uniform_edge_length(raw, a.vertices);
+  }
+  if (a.tip_angle) po.tip_angle_deg = *a.tip_angle;
+  return po;
+}
+
+void print_prepare_stats(const remeshing::PrepareOptions& po, const remeshing::PrepareStats& ps) {
+  if (po.needle_angle_deg > 0)
+    std::cout << "prepare: " << ps.degenerate_removed << " degenerate faces removed, "
+              << ps.needles_welded << " needles welded, " << ps.caps_flipped << " caps flipped, "
+              << ps.caps_removed << " caps removed\n";
+  if (po.remove_spikes)
+    std::cout << "prepare: " << ps.spike_faces_removed << " spike faces and "
+              << ps.pinch_faces_removed << " faces at pinch vertices and " << ps.tip_faces_removed
+              << " at border tips sharper than " << po.tip_angle_deg << " deg over "
+              << po.tip_reach_mm << " mm removed\n";
+  if (po.min_component_faces > 0 || po.min_component_area > 0 || po.max_hole_edges > 0 ||
+      po.max_hole_perimeter > 0)
+    std::cout << "prepare: removed " << ps.components_removed << " components (" << ps.faces_removed
+              << " faces), closed " << ps.holes_filled << " holes (" << ps.faces_added
+              << " faces)\n";
+}
+
+// The count is the one promise of the command: a miss over 1 % is an error, not a result.
+void require_vertex_count(const remeshing::RemeshResult& r, int target, std::size_t loops) {
+  const int got = r.stats.output_vertices;
+  if (std::abs(got - target) <= 0.01 * target) return;
+  std::ostringstream msg;
+  msg << "remesh: reached " << got << " vertices, not the " << target << " asked for ("
+      << std::showpos << std::lround(100.0 * (got - target) / target) << std::noshowpos
+      << " %): the input's " << loops << " boundary loops and feature lines make "
+      << r.stats.skeleton_segments << " skeleton segments with " << r.stats.branch_vertices
+      << " fixed vertices, which the remesher keeps; let the scan clean-up run (--prepare, "
+         "or drop --no-prepare), close holes (--fill-holes) or ask for more vertices";
+  throw InvalidInputError(msg.str());
+}
 
 int run_remesh(const RemeshArgs& a) {
   using namespace remeshing;
   PrepareStats ps;
   const Mesh raw = read_mesh(a.mesh);
-  double tip_reach = 0;
-  if (a.remove_spikes) {
-    // The mean edge of a uniform output with the requested count (F ~ 2 V faces).
-    double area = 0;
-    for (const auto& t : raw.triangles)
-      area += 0.5 * (raw.positions[t[1]] - raw.positions[t[0]])
-                        .cross(raw.positions[t[2]] - raw.positions[t[0]])
-                        .norm();
-    tip_reach = std::sqrt(area / (std::sqrt(3.0) / 2 * a.vertices));
-  }
-  const PrepareOptions po{.min_component_faces = a.min_component,
-                          .max_hole_edges = a.fill_holes,
-                          .needle_angle_deg = a.needle_angle,
-                          .remove_spikes = a.remove_spikes,
-                          .tip_reach_mm = tip_reach,
-                          .tip_angle_deg = a.tip_angle};
+  const PrepareOptions po = choose_prepare(raw, a);
   const Mesh input = prepare_input(raw, po, &ps);
-  if (a.needle_angle > 0)
-    std::cout << "prepare: " << ps.degenerate_removed << " degenerate faces removed, "
-              << ps.needles_welded << " needles welded, " << ps.caps_flipped << " caps flipped, "
-              << ps.caps_removed << " caps removed\n";
-  if (a.remove_spikes)
-    std::cout << "prepare: " << ps.spike_faces_removed << " spike faces and "
-              << ps.pinch_faces_removed << " faces at pinch vertices and " << ps.tip_faces_removed
-              << " at border tips sharper than " << a.tip_angle << " deg over " << tip_reach
-              << " mm removed\n";
-  if (a.min_component > 0 || a.fill_holes > 0)
-    std::cout << "prepare: removed " << ps.components_removed << " components (" << ps.faces_removed
-              << " faces), closed " << ps.holes_filled << " holes (" << ps.faces_added
-              << " faces)\n";
+  print_prepare_stats(po, ps);
+  const std::size_t input_loops = topology_stats(input).boundary_loops;
   {
     const TopologyStats ts = topology_stats(input);
     std::cout << "input: " << input.triangles.size() << " triangles, " << ts.boundary_loops
@@ -96,6 +131,8 @@ int run_remesh(const RemeshArgs& a) {
   o.density.gamma = a.uniform ? 0.0 : a.gamma;
   o.density.n_filter = a.filter;
   o.density.clip = a.clip;
+  o.density.curvature_radius = a.curvature_radius;
+  o.density.gradation = a.gradation;
   o.theta_dist_deg = a.theta_dist;
   o.skeleton.kink_angle_deg = a.kink_deg;
   o.regularize_queue = a.queue;
@@ -105,6 +142,7 @@ int run_remesh(const RemeshArgs& a) {
   o.polish_rounds = a.polish_rounds;
   o.polish_angle_deg = a.polish_angle;
   o.polish_flip_cost = a.polish_flip_cost;
+  o.polish_floor_deg = a.polish_floor;
   if (a.features == "auto") {
     o.skeleton.sharp_angle_deg = a.sharp_deg;
   } else if (!a.features.empty()) {
@@ -116,6 +154,7 @@ int run_remesh(const RemeshArgs& a) {
   };
   const RemeshResult r = remesh(input, o);
   progress->finish();
+  require_vertex_count(r, a.vertices, input_loops);
   std::filesystem::create_directories(a.out);
   const std::filesystem::path dir(a.out);
   write_ply(dir / "mesh.ply", r.mesh);
@@ -125,7 +164,14 @@ int run_remesh(const RemeshArgs& a) {
   std::ostringstream json;
   json << "{\n\"input\": \"" << a.mesh << "\",\n\"target_vertices\": " << a.vertices
        << ",\n\"scheme\": \"" << a.scheme << "\",\n\"gamma\": " << o.density.gamma
-       << ",\n\"n_filter\": " << a.filter
+       << ",\n\"n_filter\": " << a.filter << ",\n\"curvature_radius\": "
+       << o.density.curvature_radius << ",\n\"gradation\": " << o.density.gradation
+       << ",\n\"prepare\": {\"components_removed\": " << ps.components_removed
+       << ", \"holes_filled\": " << ps.holes_filled
+       << ", \"spike_faces_removed\": " << ps.spike_faces_removed
+       << ", \"pinch_faces_removed\": " << ps.pinch_faces_removed
+       << ", \"tip_faces_removed\": " << ps.tip_faces_removed
+       << ", \"needles_welded\": " << ps.needles_welded << "}"
        << ",\n\"stats\": {\"input_vertices\": " << s.input_vertices
        << ", \"input_faces\": " << s.input_faces << ", \"output_vertices\": " << s.output_vertices
        << ", \"output_faces\": " << s.output_faces
@@ -150,6 +196,7 @@ int run_remesh(const RemeshArgs& a) {
   write_file_atomically(dir / "report.json", json.str());
   write_png(dir / "quality.png", render_quality(r));
   write_png(dir / "histograms.png", quality_histograms(q));
+  write_png(dir / "density.png", render_density(input, r.density));
   std::cout << std::fixed << std::setprecision(3) << "remesh: " << s.input_vertices << " -> "
             << s.output_vertices << " vertices, " << s.output_faces << " faces in "
             << s.seconds_total << " s\n"
@@ -169,7 +216,8 @@ int run_remesh(const RemeshArgs& a) {
   if (q.self_intersections_checked)
     std::cout << ", self-intersections " << q.self_intersections << " (faces cutting another "
               << "before the repair pass: " << s.intersecting_faces_before_repair << ")";
-  std::cout << "\nwrote " << a.out << "/{mesh.ply,report.json,quality.png,histograms.png}\n";
+  std::cout << "\nwrote " << a.out
+            << "/{mesh.ply,report.json,quality.png,histograms.png,density.png}\n";
   return kSuccess;
 }
 
@@ -196,16 +244,31 @@ void register_remesh_commands(CLI::App& app, CommandList& commands) {
   c->add_option("--filter", args->filter, "n_filter smoothing passes of the density");
   c->add_option("--clip", args->clip, "Max ratio of target edge length to its median");
   c->add_flag("--uniform", args->uniform, "Uniform density (same as --gamma 0)");
+  c->add_option("--curvature-radius", args->curvature_radius,
+                "Radius (mm) the density's curvature is fitted over (-1: the output's mean edge "
+                "length; 0: the input's 2-ring, as seed 001)");
+  c->add_option("--gradation", args->gradation,
+                "Largest slope of the target edge length over the surface (0: no limit)")
+      ->check(CLI::NonNegativeNumber);
   c->add_option("--scheme", args->scheme, "regularize | lloyd")
       ->check(CLI::IsMember({"regularize", "lloyd"}));
   c->add_option("--theta-dist", args->theta_dist, "E_dist threshold (deg)");
   c->add_option("--theta-glatt", args->theta_glatt, "E_glatt threshold (deg)");
   c->add_flag("--no-intersections", args->no_intersections,
               "Skip the self-intersection test of the report");
+  auto* prepare = c->add_flag("--prepare", args->force_prepare,
+                              "Run the scan clean-up even when the input does not look like a "
+                              "scan");
+  c->add_flag("--no-prepare", args->no_prepare,
+              "No scan clean-up (by default it runs when the input has more than 8 boundary "
+              "loops or components); explicit clean-up options still apply")
+      ->excludes(prepare);
   c->add_option("--min-component", args->min_component,
-                "Drop connected components with fewer faces before remeshing (0: keep all)");
+                "Drop connected components with fewer faces before remeshing (0: keep all; "
+                "default: the clean-up's area rule)");
   c->add_option("--fill-holes", args->fill_holes,
-                "Close boundary loops with at most this many edges before remeshing (0: none)");
+                "Close boundary loops with at most this many edges before remeshing (0: none; "
+                "default: the clean-up's perimeter rule)");
   c->add_option("--needle-angle", args->needle_angle,
                 "Repair input triangles with a min angle below this (deg): degenerate faces "
                 "dropped, needles welded, caps flipped (0: off)");
@@ -225,6 +288,10 @@ void register_remesh_commands(CLI::App& app, CommandList& commands) {
                  "The polish works on faces whose min angle is below this (deg)");
   c->add_option("--polish-flip-cost", args->polish_flip_cost,
                  "Largest valence cost (rise of R) of a polish flip; 4 = a flip in a regular patch");
+  c->add_option("--polish-floor", args->polish_floor,
+                "Faces still below this min angle (deg) after the polish get more rounds with "
+                "the normal error bounds widened (0: off)")
+      ->check(CLI::Range(0.0, 60.0));
   c->add_flag("--write-prepared", args->write_prepared,
               "Also write the cleaned-up input the remesher saw (DIR/prepared.ply)");
   c->add_option("--out", args->out, "Output directory")->required();

@@ -51,7 +51,7 @@ int main(int argc, char** argv) {
   sim_cmd->add_option("-o,--out", sim.out, "Output grid file (.smg)")->required();
 
   InfoArgs info;
-  auto* info_cmd = app.add_subcommand("info", "Describe a grid (.smg) or mesh (.ply) file");
+  auto* info_cmd = app.add_subcommand("info", "Describe a grid (.smg) or mesh (.ply .off .obj .stl) file");
   info_cmd->add_option("file", info.file, "Grid or mesh file")->required();
   info_cmd->add_flag("--json", info.json, "Print JSON instead of text");
 
@@ -86,7 +86,7 @@ int main(int argc, char** argv) {
   add_mesh_options(*gm_cmd, gm.options);
 
   RenderArgs render;
-  auto* render_cmd = app.add_subcommand("render", "Render a PLY mesh to a shaded PNG");
+  auto* render_cmd = app.add_subcommand("render", "Render a mesh (.ply .off .obj .stl) to a shaded PNG");
   render_cmd->add_option("mesh", render.mesh, "Mesh file (.ply, .off, .obj, .stl)")->required();
   render_cmd->add_option("-o,--out", render.out, "Output PNG")->required();
   render_cmd->add_option("--size", render.size, "Image size in pixels")

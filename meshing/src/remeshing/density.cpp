@@ -2,13 +2,180 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <queue>
 
 #include "scanmesh/core/errors.h"
 #include "scanmesh/meshing/remeshing/remesh.h"
 
 namespace scanmesh::remeshing {
 
-std::vector<double> estimate_kappa_max(const NmMesh& m) {
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+
+// Vertex adjacency in compressed rows: the neighbours of v are nbr[first[v] .. first[v + 1]).
+struct Adjacency {
+  std::vector<int> first, nbr;
+  explicit Adjacency(const NmMesh& m) : first(m.pos.size() + 1, 0) {
+    const int n = static_cast<int>(m.pos.size());
+    std::vector<std::vector<int>> lists(n);
+    for (std::size_t f = 0; f < m.tri.size(); ++f) {
+      if (!m.face_alive[f]) continue;
+      const auto& t = m.tri[f];
+      for (int i = 0; i < 3; ++i) {
+        lists[t[i]].push_back(t[(i + 1) % 3]);
+        lists[t[i]].push_back(t[(i + 2) % 3]);
+      }
+    }
+    for (int v = 0; v < n; ++v) {
+      auto& l = lists[v];
+      std::sort(l.begin(), l.end());
+      l.erase(std::unique(l.begin(), l.end()), l.end());
+      first[v + 1] = first[v] + static_cast<int>(l.size());
+      nbr.insert(nbr.end(), l.begin(), l.end());
+    }
+  }
+};
+
+// The vertices within `radius` of v reached over mesh edges (breadth first, v first).
+void collect_patch(const NmMesh& m, const Adjacency& adj, int v, double radius,
+                   std::vector<int>& stamp, std::vector<int>& out) {
+  out.assign(1, v);
+  stamp[v] = v;
+  const double r2 = radius * radius;
+  for (std::size_t i = 0; i < out.size(); ++i)
+    for (int k = adj.first[out[i]]; k < adj.first[out[i] + 1]; ++k) {
+      const int w = adj.nbr[k];
+      if (stamp[w] == v || (m.pos[w] - m.pos[v]).squaredNorm() >= r2) continue;
+      stamp[w] = v;
+      out.push_back(w);
+    }
+}
+
+// Shape operator of the graph z = q0 x^2 + q1 xy + q2 y^2 + q3 x + q4 y at the origin
+// (first-order corrected by the slope): max |principal curvature|.
+double graph_kappa_max(double a, double b, double c, double dx, double dy) {
+  const double E = 1 + dx * dx, F = dx * dy, G = 1 + dy * dy;
+  const double w = std::sqrt(1 + dx * dx + dy * dy);
+  Eigen::Matrix2d I, II;
+  I << E, F, F, G;
+  II << 2 * a / w, b / w, b / w, 2 * c / w;
+  const Eigen::Matrix2d S = I.inverse() * II;
+  const double tr = S.trace(), det = S.determinant();
+  const double disc = std::sqrt(std::max(0.0, tr * tr / 4 - det));
+  return std::max(std::abs(tr / 2 + disc), std::abs(tr / 2 - disc));
+}
+
+// kappa_max of the weighted least-squares quadric z = a x^2 + b xy + c y^2 + d x + e y + f over
+// a patch around `centre` (f free: the centre is a noisy sample, not a point of the surface);
+// NaN when the patch does not determine it. At most ~128 of the patch's points are used.
+double patch_kappa_max(const NmMesh& m, const std::vector<Vec3>& normal,
+                       const std::vector<int>& patch, int centre, double radius) {
+  const Vec3 p0 = m.pos[centre];
+  auto weight = [&](int u) {
+    const double t = (m.pos[u] - p0).squaredNorm() / (radius * radius);
+    return (1 - t) * (1 - t);
+  };
+  Vec3 nz = Vec3::Zero();
+  for (int u : patch) nz += weight(u) * normal[u];
+  if (!(nz.norm() > 0)) return std::numeric_limits<double>::quiet_NaN();
+  nz.normalize();
+  const Vec3 ax = std::abs(nz.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
+  const Vec3 ex = (ax - ax.dot(nz) * nz).normalized(), ey = nz.cross(ex);
+  const std::size_t stride = std::max<std::size_t>(1, patch.size() / 128);
+  Eigen::Matrix<double, 6, 6> ata = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Matrix<double, 6, 1> atb = Eigen::Matrix<double, 6, 1>::Zero();
+  int used = 0;
+  for (std::size_t i = 0; i < patch.size(); i += stride) {
+    const int u = patch[i];
+    // A vertex facing away is the far side of a thin sheet reached around its rim.
+    if (normal[u].dot(nz) <= 0.2 * normal[u].norm()) continue;
+    const Vec3 d = m.pos[u] - p0;
+    const double x = d.dot(ex), y = d.dot(ey), w = weight(u);
+    Eigen::Matrix<double, 6, 1> row;
+    row << x * x, x * y, y * y, x, y, 1;
+    ata += w * row * row.transpose();
+    atb += w * d.dot(nz) * row;
+    ++used;
+  }
+  if (used < 10) return std::numeric_limits<double>::quiet_NaN();
+  const Eigen::ColPivHouseholderQR<Eigen::Matrix<double, 6, 6>> qr(ata);
+  if (qr.rank() < 6) return std::numeric_limits<double>::quiet_NaN();
+  const Eigen::Matrix<double, 6, 1> q = qr.solve(atb);
+  return graph_kappa_max(q(0), q(1), q(2), q(3), q(4));
+}
+
+double median_edge_length(const NmMesh& m) {
+  std::vector<double> len;
+  for (std::size_t f = 0; f < m.tri.size(); f += 7)  // a sample is plenty for a median
+    if (m.face_alive[f]) len.push_back((m.pos[m.tri[f][0]] - m.pos[m.tri[f][1]]).norm());
+  if (len.empty()) return 0;
+  std::nth_element(len.begin(), len.begin() + len.size() / 2, len.end());
+  return len[len.size() / 2];
+}
+
+std::vector<double> kappa_at_scale(const NmMesh& m, double radius) {
+  const int n = static_cast<int>(m.pos.size());
+  std::vector<Vec3> normal(n, Vec3::Zero());
+  for (std::size_t f = 0; f < m.tri.size(); ++f) {
+    if (!m.face_alive[f]) continue;
+    const auto& t = m.tri[f];
+    const Vec3 nf = (m.pos[t[1]] - m.pos[t[0]]).cross(m.pos[t[2]] - m.pos[t[0]]);
+    for (int c : t) normal[c] += nf;
+  }
+  for (Vec3& x : normal)
+    if (x.norm() > 0) x.normalize();
+  const Adjacency adj(m);
+  // Samples: every vertex not yet within radius / 2 of one (greedy cover, index order).
+  std::vector<int> samples, stamp(n, -1), patch;
+  std::vector<char> covered(n, 0);
+  for (int v = 0; v < n; ++v) {
+    if (covered[v] || m.vfaces[v].empty()) continue;
+    samples.push_back(v);
+    collect_patch(m, adj, v, radius / 2, stamp, patch);
+    for (int u : patch) covered[u] = 1;
+  }
+  const int ns = static_cast<int>(samples.size());
+  std::vector<std::vector<int>> patches(ns);
+  std::vector<double> fit(ns);
+#pragma omp parallel for schedule(dynamic, 64) firstprivate(stamp)
+  for (int i = 0; i < ns; ++i) {
+    collect_patch(m, adj, samples[i], radius, stamp, patches[i]);
+    fit[i] = patch_kappa_max(m, normal, patches[i], samples[i], radius);
+  }
+  std::vector<double> sum(n, 0.0), wsum(n, 0.0);
+  for (int i = 0; i < ns; ++i) {
+    if (!std::isfinite(fit[i])) continue;
+    const Vec3 c = m.pos[samples[i]];
+    for (int u : patches[i]) {
+      const double t = (m.pos[u] - c).norm() / radius;
+      const double w = (1 - t) * (1 - t) + 1e-6;
+      sum[u] += w * fit[i];
+      wsum[u] += w;
+    }
+  }
+  std::vector<double> kappa(n, 0.0);
+  bool gaps = false;
+  for (int v = 0; v < n; ++v) {
+    if (wsum[v] > 0)
+      kappa[v] = sum[v] / wsum[v];
+    else
+      gaps = gaps || !m.vfaces[v].empty();
+  }
+  if (gaps) {
+    // Patches too small or flat-sided to fit (tiny pieces of the input): their 2-ring.
+    const std::vector<double> ring = estimate_kappa_max(m, 0);
+    for (int v = 0; v < n; ++v)
+      if (wsum[v] == 0) kappa[v] = ring[v];
+  }
+  return kappa;
+}
+
+}  // namespace
+
+std::vector<double> estimate_kappa_max(const NmMesh& m, double radius) {
+  if (radius > 2 * median_edge_length(m)) return kappa_at_scale(m, radius);
   const int n = static_cast<int>(m.pos.size());
   std::vector<double> kappa(n, 0.0);
   std::vector<Eigen::Vector3d> normal(n, Eigen::Vector3d::Zero());
@@ -55,20 +222,49 @@ std::vector<double> estimate_kappa_max(const NmMesh& m) {
       rhs(static_cast<Eigen::Index>(i)) = d.dot(nz);
     }
     const Eigen::VectorXd q = A.colPivHouseholderQr().solve(rhs);
-    const double dx = q(3), dy = q(4);
-    // Shape operator of the graph at the origin (first-order corrected by the slope).
-    const double E = 1 + dx * dx, F = dx * dy, G = 1 + dy * dy;
-    const double w = std::sqrt(1 + dx * dx + dy * dy);
-    const double L = 2 * q(0) / w, M = q(1) / w, N = 2 * q(2) / w;
-    Eigen::Matrix2d I, II;
-    I << E, F, F, G;
-    II << L, M, M, N;
-    const Eigen::Matrix2d S = I.inverse() * II;
-    const double tr = S.trace(), det = S.determinant();
-    const double disc = std::sqrt(std::max(0.0, tr * tr / 4 - det));
-    kappa[v] = std::max(std::abs(tr / 2 + disc), std::abs(tr / 2 - disc));
+    kappa[v] = graph_kappa_max(q(0), q(1), q(2), q(3), q(4));
   }
   return kappa;
+}
+
+void limit_gradation(const NmMesh& m, std::vector<double>& psi, int target_vertices,
+                     double gradation) {
+  if (!(gradation > 0) || target_vertices <= 0) return;
+  const int n = static_cast<int>(m.pos.size());
+  const Adjacency adj(m);
+  // Two passes: refining raises the count integral, so the scale (and with it the slope of
+  // the absolute h) is re-estimated once.
+  for (int pass = 0; pass < 2; ++pass) {
+    double integral = 0;
+    for (std::size_t f = 0; f < m.tri.size(); ++f) {
+      if (!m.face_alive[f]) continue;
+      const auto& t = m.tri[f];
+      integral += m.face_area(static_cast<int>(f)) * 3 / (psi[t[0]] + psi[t[1]] + psi[t[2]]);
+    }
+    const double scale = std::sqrt(2.0 / std::sqrt(3.0) * integral / target_vertices);
+    if (!(scale > 0)) return;
+    std::vector<double> h(n);
+    using Item = std::pair<double, int>;
+    std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
+    for (int v = 0; v < n; ++v) {
+      h[v] = scale * std::sqrt(psi[v]);
+      queue.push({h[v], v});
+    }
+    while (!queue.empty()) {
+      const auto [hv, v] = queue.top();
+      queue.pop();
+      if (hv > h[v]) continue;
+      for (int k = adj.first[v]; k < adj.first[v + 1]; ++k) {
+        const int w = adj.nbr[k];
+        const double bound = hv + gradation * (m.pos[w] - m.pos[v]).norm();
+        if (bound < h[w]) {
+          h[w] = bound;
+          queue.push({bound, w});
+        }
+      }
+    }
+    for (int v = 0; v < n; ++v) psi[v] = (h[v] / scale) * (h[v] / scale);
+  }
 }
 
 std::vector<double> compute_density(const NmMesh& m, const DensityOptions& o) {
@@ -83,7 +279,7 @@ std::vector<double> compute_density(const NmMesh& m, const DensityOptions& o) {
         throw InvalidInputError("density field values must be positive and finite");
     psi = o.user;
   } else if (o.gamma != 0) {
-    const std::vector<double> kappa = estimate_kappa_max(m);
+    const std::vector<double> kappa = estimate_kappa_max(m, std::max(0.0, o.curvature_radius));
     for (int v = 0; v < n; ++v) psi[v] = 1.0 / std::max(kappa[v] * kappa[v], 1e-12);
   }
   if (o.clip < 1) throw InvalidInputError("density clip must be >= 1");

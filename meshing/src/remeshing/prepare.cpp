@@ -9,6 +9,7 @@
 #include <unordered_map>
 
 #include "hole_filling.h"
+#include "scanmesh/meshing/mesh_topology.h"
 #include "scanmesh/meshing/remeshing/remesh.h"
 
 namespace scanmesh::remeshing {
@@ -311,7 +312,34 @@ void remove_spikes(Surface& s, double tip_reach, double tip_angle, PrepareStats&
   }
 }
 
+double triangle_area(const Mesh& m, const std::array<int, 3>& t) {
+  return 0.5 * (m.positions[t[1]] - m.positions[t[0]])
+                   .cross(m.positions[t[2]] - m.positions[t[0]])
+                   .norm();
+}
+
 }  // namespace
+
+double uniform_edge_length(const Mesh& mesh, int vertices) {
+  double area = 0;
+  for (const auto& t : mesh.triangles) area += triangle_area(mesh, t);
+  return std::sqrt(area / (std::sqrt(3.0) / 2 * std::max(vertices, 1)));
+}
+
+bool looks_like_scan(const Mesh& mesh) {
+  const TopologyStats ts = topology_stats(mesh);
+  return ts.boundary_loops > kScanLoops || ts.components > kScanComponents;
+}
+
+PrepareOptions scan_prepare_options(const Mesh& mesh, int target_vertices) {
+  const double edge = uniform_edge_length(mesh, target_vertices);
+  return {.min_component_area = 10 * edge * edge,
+          .max_hole_perimeter = 10 * edge,
+          .needle_angle_deg = 5,
+          .remove_spikes = true,
+          .tip_reach_mm = edge,
+          .tip_angle_deg = 120};
+}
 
 Mesh prepare_input(const Mesh& original, const PrepareOptions& o, PrepareStats* stats) {
   PrepareStats st;
@@ -329,7 +357,7 @@ Mesh prepare_input(const Mesh& original, const PrepareOptions& o, PrepareStats* 
   const int nv = static_cast<int>(in.positions.size());
   const int nf = static_cast<int>(in.triangles.size());
   std::vector<char> keep(nf, 1);
-  if (o.min_component_faces > 0) {
+  if (o.min_component_faces > 0 || o.min_component_area > 0) {
     // Components by shared vertices (union-find).
     std::vector<int> parent(nv);
     for (int i = 0; i < nv; ++i) parent[i] = i;
@@ -342,11 +370,16 @@ Mesh prepare_input(const Mesh& original, const PrepareOptions& o, PrepareStats* 
       parent[find(t[2])] = find(t[0]);
     }
     std::unordered_map<int, int> size;
-    for (const auto& t : in.triangles) ++size[find(t[0])];
+    std::unordered_map<int, double> area;
+    for (const auto& t : in.triangles) {
+      const int r = find(t[0]);
+      ++size[r];
+      area[r] += triangle_area(in, t);
+    }
     std::unordered_map<int, char> counted;
     for (int f = 0; f < nf; ++f) {
       const int r = find(in.triangles[f][0]);
-      if (size[r] < o.min_component_faces) {
+      if (size[r] < o.min_component_faces || area[r] < o.min_component_area) {
         keep[f] = 0;
         ++st.faces_removed;
         if (!counted[r]) {
@@ -372,7 +405,17 @@ Mesh prepare_input(const Mesh& original, const PrepareOptions& o, PrepareStats* 
     out.triangles.push_back(t);
     out.face_labels.push_back(in.has_face_labels() ? in.face_labels[f] : 0);
   }
-  if (o.max_hole_edges > 0) {
+  if (o.max_hole_edges > 0 || o.max_hole_perimeter > 0) {
+    const int longest_walk =
+        std::max(o.max_hole_edges, o.max_hole_perimeter > 0 ? kMaxHolePatchEdges : 0);
+    // A loop is closed when it is short in edges or in length.
+    auto small_hole = [&](const std::vector<int>& loop) {
+      if (static_cast<int>(loop.size()) <= o.max_hole_edges) return true;
+      double perimeter = 0;
+      for (std::size_t i = 0; i < loop.size(); ++i)
+        perimeter += (out.positions[loop[(i + 1) % loop.size()]] - out.positions[loop[i]]).norm();
+      return perimeter <= o.max_hole_perimeter;
+    };
     // Directed boundary edges a -> b (as in their face) with the face label.
     std::map<std::pair<int, int>, int> count;
     for (const auto& t : out.triangles)
@@ -402,7 +445,7 @@ Mesh prepare_input(const Mesh& original, const PrepareOptions& o, PrepareStats* 
       while (cur != a0) {
         auto it = out_edges.find(cur);
         if (it == out_edges.end() || it->second.size() != 1 || used[cur] ||
-            static_cast<int>(loop.size()) > o.max_hole_edges) {
+            static_cast<int>(loop.size()) > longest_walk) {
           ok = false;
           break;
         }
@@ -410,7 +453,7 @@ Mesh prepare_input(const Mesh& original, const PrepareOptions& o, PrepareStats* 
         cur = it->second[0].first;
       }
       for (int v : loop) used[v] = 1;
-      if (!ok || loop.size() < 3 || static_cast<int>(loop.size()) > o.max_hole_edges) continue;
+      if (!ok || loop.size() < 3 || !small_hole(loop)) continue;
       std::vector<Eigen::Vector3d> corners;
       for (int v : loop) corners.push_back(out.positions[v]);
       // Loop vertices already joined by an edge outside the hole (an edge with a face).

@@ -158,15 +158,22 @@ class Remesher {
   int flip_pass(bool delaunay);
   int flip_queue();  // simple-edge flips, worst valence deviation first
   int simple_flips() { return o_.regularize_queue ? flip_queue() : flip_pass(false); }
-  void relax_pass(bool angle_based);
+  // Where a free vertex is moved by one relaxation pass.
+  enum class Relax {
+    StarCentroid,     // density-weighted centroid of the star's triangles (§3.4 area moves)
+    AngleBased,       // Zhou-Shimada angle-based smoothing (§3.5)
+    VoronoiCentroid,  // centroid of the vertex's Voronoi cell in its star (Lloyd, §3.6)
+  };
+  void relax_pass(Relax how);
+  Vec3 voronoi_centroid(int v, const std::vector<int>& ring) const;
   void skeleton_relax_pass();
   // The two skeleton neighbours a, b of skeleton vertex v and their parameters sa < s(v) < sb
   // on v's segment; false when v is not strictly between two (a segment end).
   bool skeleton_bounds(int v, int& a, int& b, double& sa, double& sb) const;
   // `passes` x (free vertices: centroidal or angle-based move, skeleton vertices: 1D move).
-  void relax_rounds(int passes, bool angle_based) {
+  void relax_rounds(int passes, Relax how) {
     for (int k = 0; k < passes; ++k) {
-      relax_pass(angle_based);
+      relax_pass(how);
       skeleton_relax_pass();
     }
   }
@@ -181,6 +188,9 @@ class Remesher {
   bool raise_star_min_angle(int v);          // pattern search on the surface / the segment
   bool flip_raises_min_angle(int v, int w);  // applied when it does, at a bounded valence cost
   void polish_angles();
+  //! Up to `rounds` rounds of star moves and angle flips over the faces with a min angle below
+  //! `limit` (rad); returns how many are left.
+  std::size_t polish_below(double limit, int rounds);
   void report(const std::string& phase, double f) const {
     if (o_.progress) o_.progress(phase, f);
   }
@@ -205,17 +215,20 @@ class Remesher {
 };
 
 void Remesher::build_input() {
+  // Mean edge length of a uniform mesh with the requested vertex count: F ~ 2 V faces of
+  // area sqrt(3)/4 h^2. The scale of the kink rule and of the curvature fit.
+  double area = 0;
+  for (std::size_t f = 0; f < m0_.tri.size(); ++f)
+    if (m0_.face_alive[f]) area += m0_.face_area(static_cast<int>(f));
+  const double uniform_edge = std::sqrt(area / (std::sqrt(3.0) / 2 * o_.target_vertices));
   SkeletonOptions so = o_.skeleton;
-  if (so.kink_reach_mm <= 0) {
-    // Mean edge length of a uniform mesh with the requested vertex count: F ~ 2 V faces of
-    // area sqrt(3)/4 h^2.
-    double area = 0;
-    for (std::size_t f = 0; f < m0_.tri.size(); ++f)
-      if (m0_.face_alive[f]) area += m0_.face_area(static_cast<int>(f));
-    so.kink_reach_mm = std::sqrt(area / (std::sqrt(3.0) / 2 * o_.target_vertices));
-  }
+  if (so.kink_reach_mm <= 0) so.kink_reach_mm = uniform_edge;
   sk_ = build_feature_skeleton(m0_, o_.features, so);
-  psi0_ = compute_density(m0_, o_.density);
+  DensityOptions density = o_.density;
+  if (density.curvature_radius < 0) density.curvature_radius = uniform_edge;
+  psi0_ = compute_density(m0_, density);
+  if (density.gamma != 0 || !density.user.empty())
+    limit_gradation(m0_, psi0_, o_.target_vertices, density.gradation);
   sq0_.resize(psi0_.size());
   for (std::size_t i = 0; i < psi0_.size(); ++i) sq0_[i] = std::sqrt(psi0_[i]);
   const int nf = static_cast<int>(m0_.tri.size());
@@ -803,22 +816,87 @@ void Remesher::collapse_short() {
 }
 
 int Remesher::flip_pass(bool delaunay) {
+  // Sweeps until no flip is wanted. A flip changes only the valences and angles of its quad,
+  // so after the first sweep only the edges of the faces around the flipped quads' corners
+  // can have become flippable: later sweeps visit those alone (in key order, like the first).
   int total = 0;
-  for (int pass = 0; pass < 10; ++pass) {
+  std::vector<std::uint64_t> keys = m_.edges();
+  std::vector<int> touched;
+  for (int pass = 0; pass < 10 && !keys.empty(); ++pass) {
     int n = 0;
-    for (auto k : m_.edges()) {
+    touched.clear();
+    for (auto k : keys) {
       const int v = edge_key_first(k), w = edge_key_second(k);
-      if (m_.edge_face_count(v, w) != 2) continue;
+      if (!m_.vertex_alive[v] || !m_.vertex_alive[w] || m_.edge_face_count(v, w) != 2) continue;
       const bool want = delaunay ? flip_improves_angle(v, w) : flip_improves_valence(v, w);
-      if (want && flip(v, w)) ++n;
+      if (want && flip(v, w)) {
+        ++n;
+        touched.insert(touched.end(), {v, w, last_flip_[0], last_flip_[1]});
+      }
     }
     total += n;
     if (n == 0) break;
+    keys.clear();
+    for (int u : touched)
+      for (int f : m_.vfaces[u]) {
+        const auto& t = m_.tri[f];
+        for (int i = 0; i < 3; ++i) keys.push_back(edge_key(t[i], t[(i + 1) % 3]));
+      }
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
   }
   return total;
 }
 
-void Remesher::relax_pass(bool angle_based) {
+// Moves shorter than this share of the local target edge length are not made.
+constexpr double kSettledMove = 0.02;
+
+Vec3 Remesher::voronoi_centroid(int v, const std::vector<int>& ring) const {
+  // Lloyd's step: the Voronoi cell of v restricted to its star is, per star triangle (v, a, b),
+  // the part of the triangle nearer v than a and b (the triangle clipped by the two
+  // perpendicular bisectors; exact for obtuse triangles too). Its centroid is weighted by the
+  // CVT density rho = h^-4 (a 2D CVT's cells grow as rho^-1/4), h the target edge length.
+  const Vec3 p = m_.pos[v];
+  Vec3 moment = Vec3::Zero();
+  double mass = 0;
+  std::vector<Vec3> poly, clipped;
+  auto clip = [&](const Vec3& toward) {
+    // Keep {x : (x - mid) . (toward - p) <= 0}, mid the midpoint of p and toward.
+    const Vec3 n = toward - p, mid = 0.5 * (p + toward);
+    clipped.clear();
+    for (std::size_t i = 0; i < poly.size(); ++i) {
+      const Vec3 &x = poly[i], &y = poly[(i + 1) % poly.size()];
+      const double dx = (x - mid).dot(n), dy = (y - mid).dot(n);
+      if (dx <= 0) clipped.push_back(x);
+      if ((dx < 0) != (dy < 0) && dx != dy) clipped.push_back(x + dx / (dx - dy) * (y - x));
+    }
+    poly.swap(clipped);
+  };
+  const std::size_t k = ring.size();
+  for (std::size_t i = 0; i < k; ++i) {
+    const int a = ring[i], b = ring[(i + 1) % k];
+    poly = {p, m_.pos[a], m_.pos[b]};
+    clip(m_.pos[a]);
+    clip(m_.pos[b]);
+    if (poly.size() < 3) continue;
+    // Area and centroid of the convex piece by a fan from its first corner.
+    Vec3 c = Vec3::Zero();
+    double area = 0;
+    for (std::size_t j = 1; j + 1 < poly.size(); ++j) {
+      const double t = 0.5 * (poly[j] - poly[0]).cross(poly[j + 1] - poly[0]).norm();
+      c += t * (poly[0] + poly[j] + poly[j + 1]) / 3.0;
+      area += t;
+    }
+    if (!(area > 0)) continue;
+    const double h = (vs_[v].sq + vs_[a].sq + vs_[b].sq) / 3.0;
+    const double rho = 1.0 / (h * h * h * h);
+    moment += rho * c;
+    mass += rho * area;
+  }
+  return mass > 0 ? Vec3(moment / mass) : p;
+}
+
+void Remesher::relax_pass(Relax how) {
   std::vector<int> ring;
   const int n = static_cast<int>(m_.pos.size());
   for (int v = 0; v < n; ++v) {
@@ -829,7 +907,9 @@ void Remesher::relax_pass(bool angle_based) {
     if (nrm.isZero()) continue;
     const std::size_t k = ring.size();
     Vec3 target_pt = Vec3::Zero();
-    if (angle_based) {
+    if (how == Relax::VoronoiCentroid) {
+      target_pt = voronoi_centroid(v, ring);
+    } else if (how == Relax::AngleBased) {
       // Zhou-Shimada (3.14)-(3.18) in the tangent plane: rotate (p - p_i) onto the bisector of
       // the corner angle at p_i, weight 1 / alpha_i^2.
       double wsum = 0;
@@ -873,6 +953,11 @@ void Remesher::relax_pass(bool angle_based) {
     }
     Vec3 d = target_pt - p;
     d -= d.dot(nrm) * nrm;
+    // A vertex already at its relaxed place is left alone: the move's checks (projection,
+    // star bounds, embedding) cost far more than finding that out, and most vertices settle
+    // after a few of the ~30 passes.
+    const double h = scale_ * vs_[v].sq;
+    if (d.squaredNorm() < kSettledMove * kSettledMove * h * h) continue;
     move_to(v, p + d);
   }
 }
@@ -902,7 +987,9 @@ void Remesher::skeleton_relax_pass() {
     const double ha = vs_[a].sq, hb = vs_[b].sq;
     const double s_new = (hb * sa + ha * sb) / (ha + hb);
     const double lim = 0.5 * (sb - sa);
-    move_skeleton(v, std::clamp(s_new, sa + 0.05 * lim, sb - 0.05 * lim));
+    const double s_to = std::clamp(s_new, sa + 0.05 * lim, sb - 0.05 * lim);
+    if (std::abs(s_to - vs_[v].s) < kSettledMove * scale_ * vs_[v].sq) continue;  // settled
+    move_skeleton(v, s_to);
   }
 }
 
@@ -1216,8 +1303,7 @@ bool Remesher::flip_raises_min_angle(int v, int w) {
   return false;
 }
 
-void Remesher::polish_angles() {
-  const double limit = o_.polish_angle_deg * std::numbers::pi / 180;
+std::size_t Remesher::polish_below(double limit, int rounds) {
   auto bad_faces = [&] {
     std::vector<int> bad;
     for (int f = 0; f < static_cast<int>(m_.tri.size()); ++f)
@@ -1225,9 +1311,8 @@ void Remesher::polish_angles() {
     return bad;
   };
   std::vector<int> bad = bad_faces();
-  st_.polish_bad_before = bad.size();
-  for (int round = 0; round < o_.polish_rounds && !bad.empty(); ++round) {
-    report("polish", static_cast<double>(round) / o_.polish_rounds);
+  for (int round = 0; round < rounds && !bad.empty(); ++round) {
+    report("polish", static_cast<double>(round) / rounds);
     for (int f : bad) {
       if (!m_.face_alive[f] || face_min_angle(f) >= limit) continue;
       const auto t = m_.tri[f];
@@ -1244,7 +1329,30 @@ void Remesher::polish_angles() {
     }
     bad = bad_faces();
   }
-  st_.polish_bad_after = bad.size();
+  return bad.size();
+}
+
+void Remesher::polish_angles() {
+  const double limit = o_.polish_angle_deg * std::numbers::pi / 180;
+  st_.polish_bad_before = 0;
+  for (int f = 0; f < static_cast<int>(m_.tri.size()); ++f)
+    st_.polish_bad_before += m_.face_alive[f] && face_min_angle(f) < limit;
+  st_.polish_bad_after = polish_below(limit, o_.polish_rounds);
+  // The floor: a face under polish_floor_deg is worse for every use of the mesh than a normal
+  // a little past E_glatt / E_dist. On creases finer than the output (a lion's mane at the
+  // input's own vertex count) the bounds refuse every move that would open such a face, so
+  // only for these the bounds widen to polish_floor_glatt_deg / polish_floor_dist_deg.
+  const double floor = o_.polish_floor_deg * std::numbers::pi / 180;
+  if (o_.polish_rounds == 0 || floor <= 0) return;
+  const double keep_glatt = cos_glatt_, keep_dist = cos_dist_;
+  cos_glatt_ = std::min(cos_glatt_, std::cos(o_.polish_floor_glatt_deg * std::numbers::pi / 180));
+  cos_dist_ = std::min(cos_dist_, std::cos(o_.polish_floor_dist_deg * std::numbers::pi / 180));
+  polish_below(floor, o_.polish_rounds);
+  cos_glatt_ = keep_glatt;
+  cos_dist_ = keep_dist;
+  st_.polish_bad_after = 0;
+  for (int f = 0; f < static_cast<int>(m_.tri.size()); ++f)
+    st_.polish_bad_after += m_.face_alive[f] && face_min_angle(f) < limit;
 }
 
 void Remesher::repair_intersections() {
@@ -1301,6 +1409,15 @@ RemeshResult Remesher::run() {
   cos_glatt_ = std::cos(o_.theta_glatt_deg * std::numbers::pi / 180);
   report("setup", 0);
   build_input();
+  // Branch vertices never move or go, so more of them than the target is a certain miss: say
+  // so now instead of after the whole run.
+  if (sk_.branch_vertex_count() > static_cast<std::size_t>(o_.target_vertices))
+    throw InvalidInputError("remesh: the input's feature skeleton (boundary loops, seams and "
+                            "feature lines: " + std::to_string(sk_.segments.size()) +
+                            " segments) has " + std::to_string(sk_.branch_vertex_count()) +
+                            " fixed branch vertices, more than the target of " +
+                            std::to_string(o_.target_vertices) +
+                            "; clean the scan first (scanmesh remesh --prepare) or ask for more");
   // M := M0 with the skeleton copied.
   m_ = m0_;
   patch_ = sk_.face_patch;
@@ -1345,7 +1462,7 @@ RemeshResult Remesher::run() {
     collapse_short();
     skeleton_density_control();
     flip_pass(false);
-    relax_rounds(2, false);
+    relax_rounds(2, Relax::StarCentroid);
     // Steer the scale toward the requested count.
     const double ratio = static_cast<double>(m_.vertex_count()) / o_.target_vertices;
     scale_ *= std::pow(ratio, 0.5);
@@ -1357,7 +1474,7 @@ RemeshResult Remesher::run() {
   adjust_count();
   // Area-based remeshing (§3.4): n_step x (n_area moves + Delaunay flips), skeleton control.
   for (int step = 0; step < o_.n_step; ++step) {
-    relax_rounds(o_.n_area, false);
+    relax_rounds(o_.n_area, Relax::StarCentroid);
     flip_pass(true);
     skeleton_density_control();
     adjust_count();
@@ -1382,7 +1499,7 @@ RemeshResult Remesher::run() {
     simple_flips();
   } else {
     for (int k = 0; k < 5; ++k) {
-      relax_rounds(1, false);
+      relax_rounds(1, Relax::VoronoiCentroid);
       flip_pass(true);
       skeleton_density_control();
     }
@@ -1392,7 +1509,8 @@ RemeshResult Remesher::run() {
   t1 = std::chrono::steady_clock::now();
   for (int k = 0; k < o_.smoothing_passes; ++k) {
     report("smooth", static_cast<double>(k) / std::max(1, o_.smoothing_passes));
-    relax_rounds(1, o_.scheme == RemeshScheme::Regularize);
+    relax_rounds(1, o_.scheme == RemeshScheme::Regularize ? Relax::AngleBased
+                                                          : Relax::VoronoiCentroid);
   }
   polish_angles();
   repair_intersections();

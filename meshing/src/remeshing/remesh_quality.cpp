@@ -8,6 +8,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "scanmesh/core/errors.h"
 #include "scanmesh/core/render.h"
 #include "scanmesh/meshing/mesh_check.h"
 
@@ -274,6 +275,28 @@ Image8 render_quality(const RemeshResult& r, int view_size) {
   RenderOptions o;
   o.width = o.height = view_size;
   o.draw_wireframe = true;
+  Image8 a = render_mesh(s, o);
+  o.azimuth_deg += 90;
+  Image8 b = render_mesh(s, o);
+  return hconcat({a, b});
+}
+
+Image8 render_density(const Mesh& input, const std::vector<double>& density, int view_size) {
+  if (density.size() != input.positions.size())
+    throw InvalidInputError("render_density: " + std::to_string(density.size()) +
+                            " density values for " + std::to_string(input.positions.size()) +
+                            " vertices");
+  double lo = 1e300, hi = -1e300;
+  for (double p : density) {
+    lo = std::min(lo, std::log(p));
+    hi = std::max(hi, std::log(p));
+  }
+  Mesh s = input;
+  s.colors.resize(input.positions.size());
+  for (std::size_t v = 0; v < density.size(); ++v)
+    s.colors[v] = ramp(hi > lo ? (std::log(density[v]) - lo) / (hi - lo) : 0.5);
+  RenderOptions o;
+  o.width = o.height = view_size;
   Image8 a = render_mesh(s, o);
   o.azimuth_deg += 90;
   Image8 b = render_mesh(s, o);

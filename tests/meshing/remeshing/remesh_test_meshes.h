@@ -5,6 +5,7 @@
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <random>
 #include <tuple>
 
 #include "scanmesh/core/mesh.h"
@@ -89,6 +90,67 @@ inline Mesh sphere(double r = 10.0, int rings = 40, int segments = 80) {
       if (i < rings - 1) b.add(c, d, e, 0);
     }
   return b.mesh;
+}
+
+//! Prolate ellipsoid x^2/b^2 + y^2/b^2 + z^2/a^2 = 1 (a > b: kappa_max is a / b^2 at the
+//! tips, 1 / b on the equator): an icosahedron subdivided `levels` times, pushed to the unit
+//! sphere and scaled (no poles where hundreds of slivers meet, as a scanner's mesh has none),
+//! each vertex moved along the ray from the centre by Gaussian noise of `noise` (deterministic
+//! in `seed`), as a scanner's range noise.
+inline Mesh ellipsoid(double a, double b, int levels, double noise = 0, unsigned seed = 1) {
+  using V = Eigen::Vector3d;
+  const double g = (1 + std::sqrt(5.0)) / 2;
+  std::vector<V> pos = {{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0}, {0, -1, g}, {0, 1, g},
+                        {0, -1, -g}, {0, 1, -g}, {g, 0, -1}, {g, 0, 1}, {-g, 0, -1}, {-g, 0, 1}};
+  std::vector<std::array<int, 3>> tri = {
+      {0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+      {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+      {3, 8, 9},  {4, 9, 5},  {2, 4, 11},  {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  for (V& p : pos) p.normalize();
+  for (int l = 0; l < levels; ++l) {
+    std::map<std::pair<int, int>, int> mid;
+    auto midpoint = [&](int i, int j) {
+      const auto key = std::minmax(i, j);
+      auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      pos.push_back((pos[i] + pos[j]).normalized());
+      return mid[key] = static_cast<int>(pos.size()) - 1;
+    };
+    std::vector<std::array<int, 3>> next;
+    for (const auto& t : tri) {
+      const int x = midpoint(t[0], t[1]), y = midpoint(t[1], t[2]), z = midpoint(t[2], t[0]);
+      next.push_back({t[0], x, z});
+      next.push_back({x, t[1], y});
+      next.push_back({z, y, t[2]});
+      next.push_back({x, y, z});
+    }
+    tri = std::move(next);
+  }
+  Mesh m;
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> gauss(0.0, noise > 0 ? noise : 1.0);
+  for (const V& p : pos) {
+    V q(b * p.x(), b * p.y(), a * p.z());
+    if (noise > 0) q += gauss(rng) * q.normalized();
+    m.positions.push_back(q);
+  }
+  m.triangles = tri;
+  m.face_labels.assign(tri.size(), 0);
+  return m;
+}
+
+//! kappa_max of that ellipsoid at the point of polar parameter t found from p: a surface of
+//! revolution with meridian (b sin t, a cos t), meridian curvature a b / |c'|^3 and parallel
+//! curvature a / (b |c'|), |c'|^2 = b^2 cos^2 t + a^2 sin^2 t.
+inline double ellipsoid_kappa_max(double a, double b, const Eigen::Vector3d& p) {
+  // Parametrise by the polar angle of the point: (b sin t, a cos t) in the meridian plane.
+  const double rho = std::hypot(p.x(), p.y());
+  const double t = std::atan2(rho / b, p.z() / a);
+  const double s = std::sin(t), c = std::cos(t);
+  const double speed2 = b * b * c * c + a * a * s * s;
+  const double meridian = a * b / std::pow(speed2, 1.5);
+  const double parallel = s > 1e-9 ? a / (b * std::sqrt(speed2)) : meridian;
+  return std::max(meridian, parallel);
 }
 
 //! Height field z = 2 sin(x / 4) over [0, 20]^2, n x n cells; `line` receives the vertex chain

@@ -4,13 +4,16 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <numbers>
 #include <set>
+#include <tuple>
 
 #include "remesh_test_meshes.h"
 #include "scanmesh/core/errors.h"
 #include "scanmesh/meshing/mesh_check.h"
+#include "scanmesh/meshing/mesh_topology.h"
 #include "scanmesh/meshing/remeshing/remesh.h"
 #include "scanmesh/meshing/remeshing/remesh_quality.h"
 
@@ -396,6 +399,232 @@ TEST(Prepare, WeldsNeedlesAndDropsDegenerateFaces) {
   EXPECT_EQ(rep.nonmanifold_vertices, 0u);
   EXPECT_EQ(rep.self_intersections, 0u);
   EXPECT_EQ(rep.topology.boundary_loops, 1u);
+}
+
+double surface_area(const Mesh& m) {
+  double area = 0;
+  for (const auto& t : m.triangles)
+    area += 0.5 * (m.positions[t[1]] - m.positions[t[0]])
+                      .cross(m.positions[t[2]] - m.positions[t[0]])
+                      .norm();
+  return area;
+}
+
+// Median of |estimate - truth| / truth over the vertices of the ellipsoid's middle band, where
+// the input's triangles are least stretched.
+double median_relative_error(const Mesh& m, const std::vector<double>& kappa, double a, double b) {
+  std::vector<double> err;
+  for (std::size_t v = 0; v < m.positions.size(); ++v) {
+    if (std::abs(m.positions[v].z()) > 0.6 * a) continue;
+    const double truth = test::ellipsoid_kappa_max(a, b, m.positions[v]);
+    err.push_back(std::abs(kappa[v] - truth) / truth);
+  }
+  std::nth_element(err.begin(), err.begin() + err.size() / 2, err.end());
+  return err[err.size() / 2];
+}
+
+TEST(Density, CurvatureAtTheOutputScaleIgnoresScannerNoise) {
+  // Range noise of 0.03 mm on a 0.13-0.33 mm sampling: the 2-ring quadric reads the noise as
+  // curvature (error ~ sigma / h^2, several times the true 0.125-0.2 / mm); a fit over 2.5 mm
+  // patches sees the ellipsoid (error ~ sigma / r^2 plus the patch's own bending).
+  const double a = 20, b = 8;
+  const Mesh noisy_mesh = test::ellipsoid(a, b, 6, 0.03);
+  const NmMesh exact(test::ellipsoid(a, b, 6)), noisy(noisy_mesh);
+  const double ring_exact = median_relative_error(noisy_mesh, estimate_kappa_max(exact, 0), a, b);
+  const double ring_noisy = median_relative_error(noisy_mesh, estimate_kappa_max(noisy, 0), a, b);
+  const double scale_noisy =
+      median_relative_error(noisy_mesh, estimate_kappa_max(noisy, 2.5), a, b);
+  std::printf("median relative kappa_max error: 2-ring exact %.3f, noisy %.3f; 2.5 mm noisy %.3f\n",
+              ring_exact, ring_noisy, scale_noisy);
+  EXPECT_LT(ring_exact, 0.05);   // both estimators are right on exact data
+  EXPECT_GT(ring_noisy, 0.5);    // the 2-ring one fails on noise
+  EXPECT_LT(scale_noisy, 0.15);  // the scaled one does not
+  // The tips (kappa_max = a / b^2 = 0.3125): the patch fit follows the bend there too.
+  const auto k = estimate_kappa_max(noisy, 2.5);
+  double sum = 0;
+  int n = 0;
+  for (std::size_t v = 0; v < noisy.pos.size(); ++v)
+    if (std::abs(noisy.pos[v].z()) > 0.97 * a) {
+      sum += k[v];
+      ++n;
+    }
+  ASSERT_GT(n, 0);
+  EXPECT_NEAR(sum / n, a / (b * b), 0.25 * a / (b * b));
+}
+
+// Mean length of the output edges whose midpoint lies in the band lo <= |z| / a < hi.
+double mean_edge_in_band(const Mesh& m, double a, double lo, double hi) {
+  double sum = 0;
+  int n = 0;
+  for (const auto& [k, fs] : edge_faces(m)) {
+    const Vec3 p = m.positions[edge_key_first(k)], q = m.positions[edge_key_second(k)];
+    const double z = std::abs(0.5 * (p.z() + q.z())) / a;
+    if (z < lo || z >= hi) continue;
+    sum += (p - q).norm();
+    ++n;
+  }
+  return n ? sum / n : 0;
+}
+
+TEST(Remesh, AdaptiveDensityRefinesWhereTheNoisySurfaceBends) {
+  // The tips bend 2.5x more than the equator (kappa_max 0.3125 vs 0.125 / mm): the adaptive
+  // mode must put shorter edges there on a noisy input, where uniform does not, and keep its
+  // triangles good.
+  const double a = 20, b = 8;
+  const Mesh in = test::ellipsoid(a, b, 6, 0.03);
+  RemeshOptions o;
+  o.target_vertices = 1200;
+  const RemeshResult adaptive = remesh(in, o);
+  o.density.gamma = 0;
+  const RemeshResult uniform = remesh(in, o);
+  EXPECT_EQ(adaptive.stats.output_vertices, 1200);
+  const double adaptive_ratio = mean_edge_in_band(adaptive.mesh, a, 0, 0.3) /
+                                mean_edge_in_band(adaptive.mesh, a, 0.85, 1.01);
+  const double uniform_ratio = mean_edge_in_band(uniform.mesh, a, 0, 0.3) /
+                               mean_edge_in_band(uniform.mesh, a, 0.85, 1.01);
+  const RemeshQuality qa = evaluate_remesh(in, adaptive, true);
+  std::printf("equator / tip mean edge: adaptive %.2f, uniform %.2f; adaptive %.2f %% >= 30 deg, "
+              "%.1f %% irregular, min %.1f deg\n",
+              adaptive_ratio, uniform_ratio, 100 * qa.fraction_min_angle_ge_30,
+              100 * qa.fraction_irregular, qa.min_angle_deg);
+  // h ~ kappa^-1/2 (gamma 0.5) gives sqrt(0.3125 / 0.125) = 1.58 between the bands' centres;
+  // the density filter and the gradation limit soften it toward the band edges.
+  EXPECT_GT(adaptive_ratio, 1.25);
+  EXPECT_LT(adaptive_ratio, 1.8);
+  // What the refinement buys: a closer surface at the same vertex count.
+  const RemeshQuality qu = evaluate_remesh(in, uniform, false);
+  std::printf("mean distance to the input: adaptive %.5f, uniform %.5f mm\n", qa.mean_distance,
+              qu.mean_distance);
+  EXPECT_LT(qa.mean_distance, qu.mean_distance);
+  EXPECT_NEAR(uniform_ratio, 1.0, 0.25);
+  EXPECT_GT(qa.fraction_min_angle_ge_30, 0.99);
+  EXPECT_LT(qa.fraction_irregular, 0.2);
+  EXPECT_GT(qa.min_angle_deg, 15.0);
+  EXPECT_EQ(qa.self_intersections, 0u);
+  // The density field itself: finer (smaller Psi) at the tips than on the equator.
+  double tip = 0, equator = 0;
+  int nt = 0, ne = 0;
+  for (std::size_t v = 0; v < in.positions.size(); ++v) {
+    const double z = std::abs(in.positions[v].z()) / a;
+    if (z > 0.9) {
+      tip += adaptive.density[v];
+      ++nt;
+    } else if (z < 0.2) {
+      equator += adaptive.density[v];
+      ++ne;
+    }
+  }
+  EXPECT_LT(tip / nt, 0.7 * equator / ne);  // Psi ~ 1 / kappa: 0.4 between the band centres
+}
+
+TEST(Prepare, ScanOptionsFollowTheOutputScale) {
+  // A sheet with pin-holes and crumbs looks like a scan; a sphere does not.
+  const Mesh sheet = test::wavy_sheet(60, 0, nullptr);
+  Mesh scan;
+  scan.positions = sheet.positions;
+  std::vector<Vec3> holes;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 3; ++j) holes.push_back({3.0 + 4.5 * i, 4.0 + 6.0 * j, 0});
+  for (const auto& t : sheet.triangles) {
+    const Vec3 c = (sheet.positions[t[0]] + sheet.positions[t[1]] + sheet.positions[t[2]]) / 3;
+    bool in_hole = false;
+    for (const Vec3& h : holes) in_hole = in_hole || std::hypot(c.x() - h.x(), c.y() - h.y()) < 0.6;
+    if (!in_hole) scan.triangles.push_back(t);
+  }
+  for (int k = 0; k < 10; ++k) {  // crumbs: small closed tetrahedra above the sheet
+    const int base = static_cast<int>(scan.positions.size());
+    scan.positions.push_back({2.0 * k, 30, 5});
+    scan.positions.push_back({2.0 * k + 0.5, 30, 5});
+    scan.positions.push_back({2.0 * k, 30.5, 5});
+    scan.positions.push_back({2.0 * k, 30, 5.5});
+    for (const auto& t : std::vector<std::array<int, 3>>{{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}})
+      scan.triangles.push_back({base + t[0], base + t[1], base + t[2]});
+  }
+  scan.face_labels.assign(scan.triangles.size(), 0);
+  EXPECT_TRUE(looks_like_scan(scan));
+  EXPECT_FALSE(looks_like_scan(test::sphere(10.0, 20, 40)));
+  EXPECT_FALSE(looks_like_scan(sheet));
+  const int target = 400;
+  const PrepareOptions po = scan_prepare_options(scan, target);
+  const double edge = uniform_edge_length(scan, target);
+  EXPECT_NEAR(edge, std::sqrt(surface_area(scan) / (std::sqrt(3.0) / 2 * target)), 1e-9);
+  EXPECT_DOUBLE_EQ(po.tip_reach_mm, edge);
+  PrepareStats st;
+  const Mesh out = prepare_input(scan, po, &st);
+  EXPECT_EQ(st.components_removed, 10u);
+  EXPECT_EQ(st.holes_filled, holes.size());  // every pin-hole (perimeter ~3.5 mm < 10 L)
+  const TopologyStats ts = topology_stats(out);
+  EXPECT_EQ(ts.boundary_loops, 1u);  // the sheet's border stays (80 mm, far above 10 L)
+  EXPECT_EQ(ts.components, 1u);
+}
+
+// Median over the free vertices whose star triangles are all acute of the tangential offset
+// between the vertex and the centroid of its Voronoi cell (per triangle the quad vertex - edge
+// midpoint - circumcentre - edge midpoint), in units of the mean edge length. A centroidal
+// Voronoi tessellation has every site at its cell's centroid.
+double median_voronoi_offset(const Mesh& m) {
+  std::vector<std::vector<int>> vf(m.positions.size());
+  for (std::size_t f = 0; f < m.triangles.size(); ++f)
+    for (int c : m.triangles[f]) vf[c].push_back(static_cast<int>(f));
+  double edge = 0;
+  for (const auto& t : m.triangles) edge += (m.positions[t[0]] - m.positions[t[1]]).norm();
+  edge /= static_cast<double>(m.triangles.size());
+  auto quad_part = [](const Vec3& a, const Vec3& b, const Vec3& c, Vec3& moment, double& area) {
+    const double t = 0.5 * (b - a).cross(c - a).norm();
+    moment += t * (a + b + c) / 3.0;
+    area += t;
+  };
+  std::vector<double> offsets;
+  for (std::size_t v = 0; v < m.positions.size(); ++v) {
+    const Vec3 p = m.positions[v];
+    Vec3 moment = Vec3::Zero();
+    double area = 0;
+    bool acute = !vf[v].empty();
+    for (int f : vf[v]) {
+      const auto& t = m.triangles[f];
+      const int i = t[0] == static_cast<int>(v) ? 0 : (t[1] == static_cast<int>(v) ? 1 : 2);
+      const Vec3 a = m.positions[t[(i + 1) % 3]], b = m.positions[t[(i + 2) % 3]];
+      // Circumcentre of (p, a, b).
+      const Vec3 u = a - p, w = b - p, n = u.cross(w);
+      const Vec3 cc = p + (u.squaredNorm() * w.cross(n) + w.squaredNorm() * n.cross(u)) /
+                              (2 * n.squaredNorm());
+      for (const auto& [x, y, z] : {std::tuple{p, a, b}, {a, b, p}, {b, p, a}})
+        acute = acute && (y - x).dot(z - x) > 0;
+      const Vec3 ma = 0.5 * (p + a), mb = 0.5 * (p + b);
+      quad_part(p, ma, cc, moment, area);
+      quad_part(p, cc, mb, moment, area);
+    }
+    if (!acute || !(area > 0)) continue;
+    Vec3 d = moment / area - p;
+    const Vec3 normal = p.normalized();  // the test input is a sphere about the origin
+    d -= d.dot(normal) * normal;
+    offsets.push_back(d.norm() / edge);
+  }
+  std::nth_element(offsets.begin(), offsets.begin() + offsets.size() / 2, offsets.end());
+  return offsets[offsets.size() / 2];
+}
+
+TEST(Remesh, LloydSchemeEndsNearACentroidalVoronoiTessellation) {
+  const Mesh in = test::sphere(10.0, 50, 100);
+  RemeshOptions o;
+  o.target_vertices = 800;
+  o.density.gamma = 0;
+  o.scheme = RemeshScheme::Lloyd;
+  const RemeshResult lloyd = remesh(in, o);
+  o.scheme = RemeshScheme::Regularize;  // angle-based smoothing: near-CVT on a sphere too
+  const RemeshResult regular = remesh(in, o);
+  EXPECT_EQ(lloyd.stats.output_vertices, 800);
+  const double lloyd_offset = median_voronoi_offset(lloyd.mesh);
+  const double regular_offset = median_voronoi_offset(regular.mesh);
+  const RemeshQuality q = evaluate_remesh(in, lloyd, true);
+  std::printf("median site-to-Voronoi-centroid offset: lloyd %.4f, regularize %.4f edges; "
+              "lloyd %.2f %% >= 30 deg, %.1f %% irregular\n",
+              lloyd_offset, regular_offset, 100 * q.fraction_min_angle_ge_30,
+              100 * q.fraction_irregular);
+  EXPECT_LT(lloyd_offset, 0.02);
+  EXPECT_LT(lloyd_offset, regular_offset * 1.1);
+  EXPECT_GT(q.fraction_min_angle_ge_30, 0.98);
+  EXPECT_EQ(q.self_intersections, 0u);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 // over the input patch) instead of PN triangles with local parametrisations (docs/remeshing.md).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -19,25 +20,48 @@ namespace scanmesh::remeshing {
 
 enum class RemeshScheme {
   Regularize,  //!< §3.8 connectivity regularisation + §3.5 angle-based smoothing
-  Lloyd,       //!< §3.6-like weighted centroidal relaxation with Delaunay flips
+  Lloyd,       //!< §3.6 Lloyd: moves to the Voronoi-cell centroids (rho = h^-4), Delaunay flips
 };
 RemeshScheme parse_remesh_scheme(const std::string& name);  //!< "regularize" | "lloyd"
 std::string to_string(RemeshScheme s);
 
 struct DensityOptions {
-  double gamma = 3.0;  //!< Psi <- Psi^gamma on the normalised field; 0: uniform
+  //! Psi <- Psi^gamma on the normalised field; 0: uniform. Seed 001 uses 3; 0.5 makes the
+  //! target edge h ~ kappa^-1/2, the length at which a chord's height h^2 kappa / 8 is the
+  //! same everywhere (docs/remeshing.md, "Density on scans").
+  double gamma = 0.5;
   int n_filter = 10;   //!< neighbour-mean passes (3.3), across the skeleton too
   double clip = 4.0;   //!< Psi^(1/2) (target edge length) clipped to [m/clip, m*clip], m = median
+  //! Radius (mm) of the surface patches the curvature is fitted over. < 0: the output's uniform
+  //! edge length (remesh sets it from the target count), so that scanner noise at the input's
+  //! spacing does not read as curvature; 0: the input's 2-ring (seed 001's fit).
+  double curvature_radius = -1;
+  //! Largest slope |grad h| of the absolute target edge length h over the surface (0: off).
+  //! Without it a sharp density step needs vertices of valence 4 and 8 however well the
+  //! operations work; 0.3 lets h double over about three edges.
+  double gradation = 0.3;
   std::vector<double> user;  //!< per input vertex Psi (replaces the curvature field when set)
 };
 
-//! Psi per input vertex: kappa_max^-2 from a per-vertex quadric fit over the 2-ring, clipped,
-//! filtered, raised to gamma, normalised to median 1. Throws InvalidInputError for a user field of
-//! the wrong length or with non-positive / non-finite values.
+//! Psi per input vertex: kappa_max^-2 from quadric fits (estimate_kappa_max at
+//! options.curvature_radius), clipped, filtered, raised to gamma, normalised to median 1. The
+//! gradation limit needs the absolute scale and is applied by remesh (limit_gradation). Throws
+//! InvalidInputError for a user field of the wrong length or with non-positive / non-finite
+//! values.
 std::vector<double> compute_density(const NmMesh& m0, const DensityOptions& options);
 
-//! Per input vertex kappa_max = max(|k1|, |k2|) of a least-squares quadric over the 2-ring.
-std::vector<double> estimate_kappa_max(const NmMesh& m0);
+//! Per input vertex kappa_max = max(|k1|, |k2|) of a least-squares quadric over the 2-ring
+//! (radius <= 0, or no more than two median input edges) or, at a larger radius, fitted over
+//! the vertices within `radius` reached over mesh edges (another sheet nearer than the radius
+//! stays out) around samples about radius / 2 apart, each vertex taking the distance-weighted
+//! mean of the fits whose patch holds it.
+std::vector<double> estimate_kappa_max(const NmMesh& m0, double radius = 0);
+
+//! Lowers Psi where the target edge length h = scale sqrt(Psi) (scale from the vertex count as
+//! in remesh) would grow faster than `gradation` per unit length along the input's edges:
+//! h(v) <= h(w) + gradation |v w| (a multi-source Dijkstra). Only ever refines.
+void limit_gradation(const NmMesh& m0, std::vector<double>& psi, int target_vertices,
+                     double gradation);
 
 //! Optional clean-up of scan meshes before remeshing (not part of seed 001): every boundary loop
 //! is a skeleton curve the remesher must keep, so the pin-holes and crumbs of a raw scan would
@@ -45,6 +69,12 @@ std::vector<double> estimate_kappa_max(const NmMesh& m0);
 struct PrepareOptions {
   int min_component_faces = 0;  //!< drop connected components with fewer faces
   int max_hole_edges = 0;       //!< close simple boundary loops with at most this many edges
+  //! Also drop components whose area is below this (mm^2; 0: off). scan_prepare_options sets it
+  //! so that a dropped piece would have held only a handful of output vertices.
+  double min_component_area = 0;
+  //! Also close simple boundary loops whose perimeter is at most this (mm; 0: off), up to
+  //! kMaxHolePatchEdges input edges (the patch is a cubic-time triangulation).
+  double max_hole_perimeter = 0;
   //! Triangles with a min angle below this (deg) are repaired first: zero-area faces dropped,
   //! needles (one short edge) welded shut, caps (one angle > 120 deg) flipped across their long
   //! edge or dropped when it is a boundary edge. 0: off.
@@ -67,6 +97,26 @@ struct PrepareStats {
 };
 //! Returns the cleaned mesh (labels kept; a hole's fan takes the label of its rim faces).
 Mesh prepare_input(const Mesh& input, const PrepareOptions& options, PrepareStats* stats = nullptr);
+
+//! Longest hole (in input edges) that max_hole_perimeter closes.
+inline constexpr int kMaxHolePatchEdges = 400;
+
+//! Edge length of a uniform mesh of `vertices` vertices over the input's area (F ~ 2 V
+//! equilateral faces): the scale of the output, and so of what the clean-up must remove.
+double uniform_edge_length(const Mesh& mesh, int vertices);
+
+//! What makes `scanmesh remesh` run the scan clean-up by default: a mesh as a scanner writes
+//! it (more than kScanLoops boundary loops or more than kScanComponents components: pin-holes,
+//! crumbs, a ragged border). Every boundary loop is a skeleton curve the remesher must keep, so
+//! such a mesh holds thousands of fixed vertices and misses any small target.
+inline constexpr std::size_t kScanLoops = 8, kScanComponents = 8;
+bool looks_like_scan(const Mesh& mesh);
+
+//! The clean-up for a scan remeshed to `target_vertices`, at the output's scale L
+//! (uniform_edge_length): components under 10 L^2 (about a dozen output vertices) dropped, holes
+//! with a perimeter up to 10 L (at most ten output edges) closed, needles under 5 deg repaired,
+//! spikes, pinches and border tips sharper than 120 deg over L removed.
+PrepareOptions scan_prepare_options(const Mesh& mesh, int target_vertices);
 
 struct RemeshOptions {
   int target_vertices = 20000;
@@ -95,6 +145,11 @@ struct RemeshOptions {
   double polish_angle_deg = 30.0;
   //! Largest rise of R (3.22) an angle-raising flip may cost; a flip in a regular patch costs 4.
   int polish_flip_cost = 2;
+  //! Faces still under this min angle (deg) after the polish get more polish rounds with the
+  //! error bounds widened to these angles (deg): where a crease finer than the output makes
+  //! E_glatt / E_dist refuse every move, a needle is the worse error. 0: off.
+  double polish_floor_deg = 30.0;
+  double polish_floor_glatt_deg = 85.0, polish_floor_dist_deg = 120.0;
   //! Called with (phase name, fraction done in [0, 1]); may be empty.
   std::function<void(const std::string&, double)> progress;
 };

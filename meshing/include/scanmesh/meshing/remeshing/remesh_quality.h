@@ -51,6 +51,10 @@ RemeshQuality evaluate_remesh(const Mesh& input, const RemeshResult& result,
 //! Mesh coloured by Q (blue 1 -> red >= 2), irregular vertices marked (white: too many
 //! neighbours, black: too few), two views side by side.
 Image8 render_quality(const RemeshResult& result, int view_size = 560);
+//! The input coloured by the density's target edge length sqrt(Psi) on a log scale (blue:
+//! shortest, red: longest; the output is densest where blue), two views side by side.
+Image8 render_density(const Mesh& input, const std::vector<double>& density,
+                      int view_size = 560);
 //! Histograms of Q and of the min angle, side by side.
 Image8 quality_histograms(const RemeshQuality& q);
 
