@@ -139,6 +139,9 @@ std::vector<double> kappa_at_scale(const NmMesh& m, double radius) {
   const int ns = static_cast<int>(samples.size());
   std::vector<std::vector<int>> patches(ns);
   std::vector<double> fit(ns);
+  // Fresh marks: the cover's marks would hide vertices from the patches of their own samples,
+  // differently for every thread schedule.
+  std::fill(stamp.begin(), stamp.end(), -1);
 #pragma omp parallel for schedule(dynamic, 64) firstprivate(stamp)
   for (int i = 0; i < ns; ++i) {
     collect_patch(m, adj, samples[i], radius, stamp, patches[i]);

@@ -143,14 +143,18 @@ int NmMesh::count_neighbours(int v) const {
 }
 
 std::vector<std::uint64_t> NmMesh::edges() const {
+  // Vertex by vertex, each edge from its smaller end: only the few keys of one vertex need
+  // sorting (a global sort of all 3F keys was ~15 % of a remesh; called every pass).
   std::vector<std::uint64_t> out;
-  for (std::size_t f = 0; f < tri.size(); ++f) {
-    if (!face_alive[f]) continue;
-    const auto& t = tri[f];
-    for (int i = 0; i < 3; ++i) out.push_back(edge_key(t[i], t[(i + 1) % 3]));
+  out.reserve(static_cast<std::size_t>(live_faces_) * 3 / 2 + 16);
+  for (std::size_t v = 0; v < vfaces.size(); ++v) {
+    const std::size_t first = out.size();
+    for (int f : vfaces[v])
+      for (int c : tri[f])
+        if (c > static_cast<int>(v)) out.push_back(edge_key(static_cast<int>(v), c));
+    std::sort(out.begin() + static_cast<std::ptrdiff_t>(first), out.end());
+    out.erase(std::unique(out.begin() + static_cast<std::ptrdiff_t>(first), out.end()), out.end());
   }
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;
 }
 

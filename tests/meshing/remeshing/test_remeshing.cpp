@@ -1,6 +1,7 @@
 // Seed 001 remeshing: skeleton, density, the non-manifold acceptance input (two boxes sharing a
 // face), feature lines, vertex count, error bounds, self-intersections, determinism.
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <Eigen/Geometry>
 #include <cmath>
@@ -474,7 +475,15 @@ TEST(Remesh, AdaptiveDensityRefinesWhereTheNoisySurfaceBends) {
   const Mesh in = test::ellipsoid(a, b, 6, 0.03);
   RemeshOptions o;
   o.target_vertices = 1200;
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const RemeshResult serial = remesh(in, o);
+  omp_set_num_threads(2);
   const RemeshResult adaptive = remesh(in, o);
+  omp_set_num_threads(threads);
+  // The density's patch fits run in parallel: the result must not depend on the schedule.
+  EXPECT_EQ(serial.mesh.positions, adaptive.mesh.positions);
+  EXPECT_EQ(serial.mesh.triangles, adaptive.mesh.triangles);
   o.density.gamma = 0;
   const RemeshResult uniform = remesh(in, o);
   EXPECT_EQ(adaptive.stats.output_vertices, 1200);
