@@ -172,16 +172,9 @@ Row remesh_row(const std::string& method, const std::string& threads, double sec
   return row;
 }
 
-// mannequin-devil's remesh is a known failure (docs/benchmarks.md): 80 s on an idle machine for
-// 122703 instead of 12977 vertices. It runs only when the file is named on the command line, so
-// that the default run stays within a few minutes.
-constexpr const char* kMannequin = "mannequin-devil.off";
-constexpr const char* kSkippedRemeshNote =
-    "known blow-up (80 s, 122703 vertices): run `bench_real mannequin-devil.off`";
-
-// Timed once: the remesher is the slow stage (about 80 s on mannequin-devil), and it is serial
-// apart from the density estimate (a 1-thread run measured the same within noise).
-void compare_remeshers(const Mesh& in, bool run_ours) {
+// Timed once per thread count: the remesher is the slow stage, serial apart from the density
+// estimate; the 1-thread row is the same-thread-count comparison with CGAL.
+void compare_remeshers(const Mesh& in) {
   const int target = static_cast<int>(in.positions.size());
   const double edge = median_edge_length(in);
   remeshing::RemeshOptions o;  // `scanmesh remesh --vertices <input count>`: the CLI's defaults
@@ -191,12 +184,9 @@ void compare_remeshers(const Mesh& in, bool run_ours) {
   input.notes += std::to_string(target) + " vertices, median edge " + fmt("%.4g", edge);
   print(input);
   remeshing::RemeshResult ours;
-  const double t_ours =
-      run_ours ? bench::time_median(1, [&] { ours = remeshing::remesh(in, o); }) : 0;
-  Row r = run_ours ? remesh_row("scanmesh remesh", std::to_string(omp_get_max_threads()), t_ours,
-                                ours.mesh, in, edge)
-                   : Row{"remesh", "scanmesh remesh", "–", "skipped"};
-  if (!run_ours) r.notes = kSkippedRemeshNote;
+  const double t_ours = bench::time_median(1, [&] { ours = remeshing::remesh(in, o); });
+  Row r = remesh_row("scanmesh remesh", std::to_string(omp_get_max_threads()), t_ours, ours.mesh,
+                     in, edge);
   bench::CgalSurfaceMesh base;
   if (!bench::to_cgal(in, base)) {
     r.notes += "; CGAL: input is no polygon mesh";
@@ -204,8 +194,19 @@ void compare_remeshers(const Mesh& in, bool run_ours) {
     return;
   }
   const auto cgal = bench::cgal_remesh_to_count(base, bench::surface_area(in), target);
-  if (run_ours) r.ratio = fmt("%.2f", cgal.seconds / t_ours);
+  r.ratio = fmt("%.2f", cgal.seconds / t_ours);
   print(r);
+  if (omp_get_max_threads() > 1) {
+    // Same thread count as CGAL (serial): only the density's patch fits run in parallel.
+    const int threads = omp_get_max_threads();
+    omp_set_num_threads(1);
+    remeshing::RemeshResult serial;
+    const double t1 = bench::time_median(1, [&] { serial = remeshing::remesh(in, o); });
+    omp_set_num_threads(threads);
+    Row r1 = remesh_row("scanmesh remesh", "1", t1, serial.mesh, in, edge);
+    r1.ratio = fmt("%.2f", cgal.seconds / t1);
+    print(r1);
+  }
   Row c = remesh_row("CGAL isotropic_remeshing", "1", cgal.seconds, cgal.mesh, in, edge);
   c.notes += ", L " + fmt("%.4g", cgal.edge_length);
   print(c);
@@ -346,7 +347,7 @@ void compare_curvature(const RangeGrid& g) {
   print({"curvature", "PCL normals (OMP) + principal curvatures", "1 + 1", fmt("%.3f", t_pcl1)});
 }
 
-void bench_file(const fs::path& path, bool cloud, bool named) {
+void bench_file(const fs::path& path, bool cloud) {
   std::printf("\n### %s\n\n", path.filename().c_str());
   if (cloud) {
     const auto pts = read_point_cloud(path).finite_points().positions;
@@ -357,7 +358,7 @@ void bench_file(const fs::path& path, bool cloud, bool named) {
     const Mesh m = read_mesh(path);
     std::printf("%zu vertices, %zu triangles\n\n", m.positions.size(), m.triangles.size());
     print_header();
-    compare_remeshers(m, named || path.filename() != kMannequin);
+    compare_remeshers(m);
   }
   const Imported im = import_and_mesh(path, cloud);
   compare_curvature(im.result.grid);
@@ -384,9 +385,9 @@ int main(int argc, char** argv) {
       "input mesh; cells = the imported grid's dh.\n",
       corpus.c_str(), omp_get_max_threads(), g_runs);
   for (const char* f : {"kitten.xyz", "hippo1.ply", "hippo2.ply", "oni.ply", "radar.xyz"})
-    if (wanted(picks, f)) bench_file(corpus / "points_3" / f, true, !picks.empty());
+    if (wanted(picks, f)) bench_file(corpus / "points_3" / f, true);
   for (const char* f :
        {"nefertiti.off", "head.off", "elephant.off", "lion-head.off", "mannequin-devil.off"})
-    if (wanted(picks, f)) bench_file(corpus / "meshes" / f, false, !picks.empty());
+    if (wanted(picks, f)) bench_file(corpus / "meshes" / f, false);
   return 0;
 }

@@ -81,19 +81,30 @@ INSTANTIATE_TEST_SUITE_P(Meshes, RealCorpusRemesh, ::testing::ValuesIn(kRemeshCa
                            return n;
                          });
 
-// mannequin-devil.off (12977 vertices; the input itself has 1643 intersecting face pairs) is a
-// known failure, kept out of the fast suite: remesh to 12977 vertices took 80 s and returned
-// 122703 vertices, 245351 faces with 140256 intersecting face pairs and min angle 0.01 deg (still
-// edge-manifold, 1 boundary loop, Euler 1 like the input). This test states what should hold;
-// run it with --gtest_also_run_disabled_tests.
-TEST(RealCorpusRemeshKnownFailure,
-     DISABLED_MannequinDevilKeepsItsVertexCountAndHasNoIntersections) {
+// mannequin-devil cuts itself (1,643 intersecting input face pairs). The intersection repair
+// split edges without end there (122,703 instead of 12,977 vertices, 80 s); its splits now stop
+// at 1 % over the target, so the count holds and the run takes seconds.
+TEST(RealCorpusRemesh, MannequinDevilKeepsItsVertexCountAndTopology) {
   const Mesh in = read_mesh(kCorpus / "meshes" / "mannequin-devil.off");
   remeshing::RemeshOptions o;
   o.target_vertices = static_cast<int>(in.positions.size());
   const remeshing::RemeshResult r = remeshing::remesh(in, o);
   EXPECT_NEAR(double(r.mesh.positions.size()), double(in.positions.size()),
-              0.02 * double(in.positions.size()));
+              0.01 * double(in.positions.size()));
+  const MeshCheckReport rep = check_mesh(r.mesh, {.self_intersections = false});
+  EXPECT_TRUE(rep.edge_manifold());
+  EXPECT_EQ(rep.topology.boundary_loops, 1u);
+  EXPECT_EQ(rep.topology.euler_characteristic, 1);
+}
+
+// Known failure, run it with --gtest_also_run_disabled_tests: the output still cuts itself where
+// the input does (1,489 intersecting faces measured; CGAL's output has 173), and its worst
+// triangle is 0.03 deg.
+TEST(RealCorpusRemeshKnownFailure, DISABLED_MannequinDevilHasNoIntersections) {
+  const Mesh in = read_mesh(kCorpus / "meshes" / "mannequin-devil.off");
+  remeshing::RemeshOptions o;
+  o.target_vertices = static_cast<int>(in.positions.size());
+  const remeshing::RemeshResult r = remeshing::remesh(in, o);
   EXPECT_EQ(check_mesh(r.mesh).self_intersections, 0u);
 }
 
