@@ -56,10 +56,10 @@ struct RemeshArgs {
 remeshing::PrepareOptions choose_prepare(const Mesh& raw, const RemeshArgs& a) {
   using namespace remeshing;
   PrepareOptions po;
-  const bool scan = looks_like_scan(raw);
+  const TopologyStats ts = topology_stats(raw);
+  const bool scan = looks_like_scan(ts);
   if (!a.no_prepare && (a.force_prepare || scan)) {
     po = scan_prepare_options(raw, a.vertices);
-    const TopologyStats ts = topology_stats(raw);
     std::cout << "prepare: " << (scan ? "the input looks like a scan" : "asked for") << " ("
               << ts.boundary_loops << " boundary loops, " << ts.components
               << " components): scan clean-up at the output's edge length "
@@ -123,9 +123,10 @@ int run_remesh(const RemeshArgs& a) {
   const PrepareOptions po = choose_prepare(raw, a);
   const Mesh input = prepare_input(raw, po, &ps);
   print_prepare_stats(po, ps);
-  const std::size_t input_loops = topology_stats(input).boundary_loops;
+  std::size_t input_loops = 0;
   {
     const TopologyStats ts = topology_stats(input);
+    input_loops = ts.boundary_loops;
     std::cout << "input: " << input.triangles.size() << " triangles, " << ts.boundary_loops
               << " boundary loops";
     if (!ts.boundary_loop_lengths.empty())

@@ -230,6 +230,17 @@ std::vector<double> estimate_kappa_max(const NmMesh& m, double radius) {
   return kappa;
 }
 
+double density_scale(const NmMesh& m, const std::vector<double>& psi, int target_vertices) {
+  double integral = 0;
+  for (std::size_t f = 0; f < m.tri.size(); ++f) {
+    if (!m.face_alive[f]) continue;
+    const auto& t = m.tri[f];
+    const double p = (psi[t[0]] + psi[t[1]] + psi[t[2]]) / 3;
+    integral += m.face_area(static_cast<int>(f)) / p;
+  }
+  return std::sqrt(2.0 / std::sqrt(3.0) * integral / target_vertices);
+}
+
 void limit_gradation(const NmMesh& m, std::vector<double>& psi, int target_vertices,
                      double gradation) {
   if (!(gradation > 0) || target_vertices <= 0) return;
@@ -238,13 +249,7 @@ void limit_gradation(const NmMesh& m, std::vector<double>& psi, int target_verti
   // Two passes: refining raises the count integral, so the scale (and with it the slope of
   // the absolute h) is re-estimated once.
   for (int pass = 0; pass < 2; ++pass) {
-    double integral = 0;
-    for (std::size_t f = 0; f < m.tri.size(); ++f) {
-      if (!m.face_alive[f]) continue;
-      const auto& t = m.tri[f];
-      integral += m.face_area(static_cast<int>(f)) * 3 / (psi[t[0]] + psi[t[1]] + psi[t[2]]);
-    }
-    const double scale = std::sqrt(2.0 / std::sqrt(3.0) * integral / target_vertices);
+    const double scale = density_scale(m, psi, target_vertices);
     if (!(scale > 0)) return;
     std::vector<double> h(n);
     using Item = std::pair<double, int>;

@@ -326,10 +326,11 @@ double uniform_edge_length(const Mesh& mesh, int vertices) {
   return std::sqrt(area / (std::sqrt(3.0) / 2 * std::max(vertices, 1)));
 }
 
-bool looks_like_scan(const Mesh& mesh) {
-  const TopologyStats ts = topology_stats(mesh);
+bool looks_like_scan(const TopologyStats& ts) {
   return ts.boundary_loops > kScanLoops || ts.components > kScanComponents;
 }
+
+bool looks_like_scan(const Mesh& mesh) { return looks_like_scan(topology_stats(mesh)); }
 
 PrepareOptions scan_prepare_options(const Mesh& mesh, int target_vertices) {
   const double edge = uniform_edge_length(mesh, target_vertices);

@@ -1445,15 +1445,7 @@ RemeshResult Remesher::run() {
   sedge_ = sk_.edge_segment;
   seg_edges_.assign(sk_.segments.size(), 0);
   for (const auto& [k, s] : sedge_) ++seg_edges_[s];
-  // Scale: V ~ (2 / sqrt 3) * integral of 1 / h^2 with h = scale * sqrt(Psi).
-  double integral = 0;
-  for (std::size_t f = 0; f < m0_.tri.size(); ++f) {
-    if (!m0_.face_alive[f]) continue;
-    const auto& t = m0_.tri[f];
-    const double p = (psi0_[t[0]] + psi0_[t[1]] + psi0_[t[2]]) / 3;
-    integral += m0_.face_area(static_cast<int>(f)) / p;
-  }
-  scale_ = std::sqrt(2.0 / std::sqrt(3.0) * integral / o_.target_vertices);
+  scale_ = density_scale(m0_, psi0_, o_.target_vertices);
   st_.input_vertices = m0_.vertex_count();
   st_.input_faces = m0_.face_count();
   st_.seconds_setup = seconds_since(t0);

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "scanmesh/core/mesh.h"
+#include "scanmesh/meshing/mesh_topology.h"
 #include "scanmesh/meshing/remeshing/feature_skeleton.h"
 
 namespace scanmesh::remeshing {
@@ -56,6 +57,10 @@ std::vector<double> compute_density(const NmMesh& m0, const DensityOptions& opti
 //! stays out) around samples about radius / 2 apart, each vertex taking the distance-weighted
 //! mean of the fits whose patch holds it.
 std::vector<double> estimate_kappa_max(const NmMesh& m0, double radius = 0);
+
+//! The scale s of the target edge length h = s sqrt(Psi) that gives `target_vertices`:
+//! V ~ (2 / sqrt 3) * integral of 1 / h^2 over the input.
+double density_scale(const NmMesh& m0, const std::vector<double>& psi, int target_vertices);
 
 //! Lowers Psi where the target edge length h = scale sqrt(Psi) (scale from the vertex count as
 //! in remesh) would grow faster than `gradation` per unit length along the input's edges:
@@ -111,6 +116,7 @@ double uniform_edge_length(const Mesh& mesh, int vertices);
 //! such a mesh holds thousands of fixed vertices and misses any small target.
 inline constexpr std::size_t kScanLoops = 8, kScanComponents = 8;
 bool looks_like_scan(const Mesh& mesh);
+bool looks_like_scan(const TopologyStats& stats);  //!< the same from the mesh's statistics
 
 //! The clean-up for a scan remeshed to `target_vertices`, at the output's scale L
 //! (uniform_edge_length): components under 10 L^2 (about a dozen output vertices) dropped, holes
