@@ -270,7 +270,7 @@ Calibration Calibration::from_yaml_text(const std::string& text, const std::stri
 
 Calibration Calibration::read_yaml(const std::filesystem::path& path) {
   // Whole-file read through core (names the file and the OS reason, refuses a directory).
-  const std::vector<std::uint8_t> bytes = read_file_bytes(path);
+  const std::vector<std::uint8_t> bytes = read_file_bytes(path, kMaxConfigFileBytes);
   return from_yaml_text(std::string(bytes.begin(), bytes.end()), path.string());
 }
 

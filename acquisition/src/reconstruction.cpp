@@ -183,6 +183,14 @@ std::vector<TriangulatedPoint> triangulate_scan(
   const std::size_t n = source.step_count();
   for (std::size_t s = 0; s < n; ++s) {
     const ScanStep step = source.step(s);
+    // The intrinsics hold for the image size they were calibrated at: on frames of another size
+    // every ray would be wrong, silently.
+    const int fw = step.laser_off.width, fh = step.laser_off.height;
+    if (cal.camera.width > 0 && (fw != cal.camera.width || fh != cal.camera.height))
+      throw InvalidInputError("the calibration is for " + std::to_string(cal.camera.width) + "x" +
+                              std::to_string(cal.camera.height) + " images, step " +
+                              std::to_string(s) + " has " + std::to_string(fw) + "x" +
+                              std::to_string(fh) + ": calibrate at the scan's frame size");
     for (std::size_t k = 0; k < step.laser_on.size(); ++k) {
       LineExtractionStats ls;
       const auto peaks = extract_laser_line(step.laser_on[k], step.laser_off, lo, &ls);

@@ -239,7 +239,7 @@ std::string header_to_json(const SessionHeader& h) {
                           {"bottom_mm", c.pattern.bottom_mm}}},
                         {"poses", poses}};
   }
-  return j.dump(2) + "\n";
+  return j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
 }
 
 std::string step_to_json_line(const StepRecord& s) {
@@ -253,7 +253,7 @@ std::string step_to_json_line(const StepRecord& s) {
                         {"timestamp_s", f.timestamp_s},
                         {"dropped_before", f.dropped_before}}}});
   json j = {{"step", s.index}, {"angle_rad", s.angle_rad}, {"frames", frames}};
-  return j.dump() + "\n";
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
 }
 
 SessionManifest parse_session_manifest(std::string_view header_json, std::string_view steps_jsonl,
@@ -463,6 +463,11 @@ Image8 SessionReader::frame(std::size_t step, std::size_t k) const {
     throw InvalidInputError("no frame " + std::to_string(k) + " in step " + std::to_string(step));
   const FrameRecord& r = manifest_.steps[step].frames[k];
   const fs::path path = folder_ / r.file;
+  std::error_code ec;
+  if (fs::is_symlink(path, ec))
+    throw FileFormatError(path, "is a symbolic link; a session's frames are its own files");
+  // Part of the session is gone: the session is damaged (exit 4), not an OS failure.
+  if (!fs::exists(path, ec)) throw FileFormatError(path, "recorded frame is missing");
   Image8 img;
   if (manifest_.header.storage == FrameStorage::Png) {
     img = read_png(path);
@@ -477,6 +482,18 @@ Image8 SessionReader::frame(std::size_t step, std::size_t k) const {
   if (pixels_crc(img) != r.rgb_crc32)
     throw FileFormatError(path, "frame content does not match its CRC in steps.jsonl");
   return img;
+}
+
+std::optional<SessionReader::Damage> SessionReader::first_damaged_step() const {
+  for (std::size_t i = 0; i < manifest_.steps.size(); ++i)
+    for (std::size_t k = 0; k < manifest_.steps[i].frames.size(); ++k) {
+      try {
+        (void)frame(i, k);
+      } catch (const Error& e) {  // FileFormatError, IoError (missing file)
+        return Damage{i, e.what()};
+      }
+    }
+  return std::nullopt;
 }
 
 ScanStep SessionReader::step(std::size_t i) const {

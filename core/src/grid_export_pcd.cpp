@@ -1,5 +1,6 @@
 // PCD export: the only translation unit of scanmesh that includes PCL headers (they are heavy;
 // keeping them here keeps the rest of core fast to compile). docs/formats.md, "Exports".
+#include <pcl/console/print.h>
 #include <pcl/io/pcd_io.h>
 #include <pcl/point_types.h>
 
@@ -46,7 +47,12 @@ void export_pcd(const std::filesystem::path& path, const RangeGrid& grid) {
   const std::filesystem::path tmp = temporary_path_beside(path);
   std::string reason;
   try {
-    if (pcl::io::savePCDFileBinary(tmp.string(), cloud) != 0) reason = "PCL could not write it";
+    // PCL prints its own failure line to stderr; scanmesh's one message below says it all.
+    const auto verbosity = pcl::console::getVerbosityLevel();
+    pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
+    const int rc = pcl::io::savePCDFileBinary(tmp.string(), cloud);
+    pcl::console::setVerbosityLevel(verbosity);
+    if (rc != 0) reason = "PCL could not write it";
   } catch (const std::exception& e) {
     reason = e.what();
   }

@@ -20,6 +20,13 @@ namespace scanmesh {
 
 namespace {
 
+// A length for a message: "%g", never std::to_string's 309 digits of 1e308.
+std::string short_length(double v) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%g", v);
+  return buffer;
+}
+
 // "SCANMESHGRID" then CR LF SUB LF (the PNG trick): a text-mode transfer that rewrites line ends
 // or stops at ^Z mangles these four bytes and the magic check fails straight away.
 constexpr std::array<std::uint8_t, 16> kMagic = {'S', 'C', 'A', 'N', 'M',  'E',  'S',  'H',
@@ -117,7 +124,10 @@ RangeGrid decode_grid(std::span<const std::uint8_t> bytes, const std::filesystem
   const double phi0 = read_le_f64(p + 32), h0 = read_le_f64(p + 40), dh = read_le_f64(p + 48);
   if (!std::isfinite(phi0) || !std::isfinite(h0)) fail("phi0/h0 are not finite");
   if (!std::isfinite(dh) || !(dh > 0.0))
-    fail("height step dh = " + std::to_string(dh) + " is not positive");
+    fail("height step dh = " + short_length(dh) + " is not positive");
+  if (std::abs(h0) > kMaxGridLengthMm || std::abs(h0 + dh * n_h) > kMaxGridLengthMm)
+    fail("rows span heights beyond 1e6 mm (h0 " + short_length(h0) + " mm, dh " +
+         short_length(dh) + " mm): not a scan");
 
   // 6. Metadata, every length checked against the end of the header.
   std::map<std::string, std::string> metadata;
@@ -158,9 +168,9 @@ RangeGrid decode_grid(std::span<const std::uint8_t> bytes, const std::filesystem
     const float c = read_le_f32(confidence_plane + 4 * k);
     if (v > 1)
       fail(cell_name(k, n_phi) + ": validity byte " + std::to_string(v) + " is not 0 or 1");
-    if (v == 1 && (!std::isfinite(r) || !(r > 0.0f)))
-      fail(cell_name(k, n_phi) + ": valid cell has radius " + std::to_string(r) +
-           " (must be finite and > 0)");
+    if (v == 1 && (!std::isfinite(r) || !(r > 0.0f) || r > kMaxGridLengthMm))
+      fail(cell_name(k, n_phi) + ": valid cell has radius " + short_length(r) +
+           " (must be finite, > 0 and at most 1e6 mm)");
     if (v == 0 && r != 0.0f)
       fail(cell_name(k, n_phi) + ": invalid cell has radius " + std::to_string(r) + " (must be 0)");
     if (!std::isfinite(c) || c < 0.0f || c > 1.0f)

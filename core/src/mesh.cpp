@@ -1,6 +1,10 @@
 #include "scanmesh/core/mesh.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <utility>
+#include <vector>
 #include <string>
 
 #include "scanmesh/core/errors.h"
@@ -48,6 +52,27 @@ void Mesh::compute_vertex_normals() {
     const double len = sum[v].norm();
     normals[v] = len > 0 ? Eigen::Vector3f((sum[v] / len).cast<float>()) : Eigen::Vector3f::UnitZ();
   }
+}
+
+// Flags every face whose three corner positions (as a set) repeat an earlier face's.
+std::vector<char> faces_repeating_earlier_geometry(const Mesh& mesh) {
+  using Corners = std::array<std::array<double, 3>, 3>;
+  const auto& F = mesh.triangles;
+  std::vector<std::pair<Corners, int>> keyed(F.size());
+  for (std::size_t f = 0; f < F.size(); ++f) {
+    Corners c;
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d& p = mesh.positions[F[f][k]];
+      c[k] = {p.x(), p.y(), p.z()};
+    }
+    std::sort(c.begin(), c.end());
+    keyed[f] = {c, static_cast<int>(f)};
+  }
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<char> repeats(F.size(), 0);
+  for (std::size_t i = 1; i < keyed.size(); ++i)
+    if (keyed[i].first == keyed[i - 1].first) repeats[keyed[i].second] = 1;
+  return repeats;
 }
 
 }  // namespace scanmesh

@@ -104,7 +104,11 @@ class Rasteriser {
   }
 
   Image8 run() {
-    for (std::size_t f = 0; f < mesh_.triangles.size(); ++f) draw_triangle(f);
+    // A copy of an earlier triangle draws the same pixels: drawn once, so that a file of
+    // 100,000 copies of one large triangle costs one triangle's fill, not 100,000.
+    const std::vector<char> repeats = faces_repeating_earlier_geometry(mesh_);
+    for (std::size_t f = 0; f < mesh_.triangles.size(); ++f)
+      if (!repeats[f]) draw_triangle(f);
     return std::move(image_);
   }
 

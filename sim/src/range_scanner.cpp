@@ -1,6 +1,8 @@
 // The simulated cylindrical range scanner and its defects (docs/simulator.md).
 #include "scanmesh/sim/range_scanner.h"
 
+#include "scanmesh/core/grid_file.h"
+
 #include <omp.h>
 
 #include <algorithm>
@@ -41,9 +43,16 @@ void check(bool ok, const std::string& problem) {
 void ScannerConfig::validate() const {
   check(n_phi >= 2 && n_phi <= 8192, "n_phi must be in [2, 8192], got " + std::to_string(n_phi));
   check(n_h >= 2 && n_h <= 8192, "n_h must be in [2, 8192], got " + std::to_string(n_h));
+  // The simulation holds ~160 bytes per cell while it renders: 4 M cells (2048 x 2048) stay
+  // below 1 GB, the 64 M a grid file may hold would take over 10 GB.
+  check(static_cast<long long>(n_phi) * n_h <= kMaxSimulatedCells,
+        "n_phi x n_h must be at most " + std::to_string(kMaxSimulatedCells) + " cells (e.g. 2048 x 2048)");
   check(std::isfinite(radius_mm) && radius_mm > 0.0, "radius_mm must be positive");
   check(std::isfinite(h0_mm), "h0_mm must be finite");
   check(std::isfinite(dh_mm) && dh_mm > 0.0, "dh_mm must be positive");
+  check(radius_mm <= kMaxGridLengthMm && std::abs(h0_mm) <= kMaxGridLengthMm &&
+            std::abs(h0_mm + dh_mm * n_h) <= kMaxGridLengthMm,
+        "radius_mm and the rows' heights (h0_mm + n_h * dh_mm) must stay within 1e6 mm");
   check(std::isfinite(phi0_rad), "phi0_rad must be finite");
   check(std::isfinite(noise_sigma_mm) && noise_sigma_mm >= 0.0, "noise_sigma_mm must be >= 0");
   check(std::isfinite(grazing_limit_deg) && grazing_limit_deg > 0.0 && grazing_limit_deg <= 90.0,

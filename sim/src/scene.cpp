@@ -215,6 +215,10 @@ Scene Scene::from_yaml_text(const std::string& text, const std::string& source_n
   const YAML::Node objects = rd.required(root, "objects", "scene");
   if (!objects.IsSequence() || objects.size() == 0)
     rd.fail(objects, "scene 'objects' must be a non-empty list");
+  // Every ray meets every object: the simulation's time grows with their count.
+  if (objects.size() > Scene::kMaxObjects)
+    rd.fail(objects, "a scene holds at most " + std::to_string(Scene::kMaxObjects) +
+                         " objects, this one " + std::to_string(objects.size()));
   try {
     for (std::size_t k = 0; k < objects.size(); ++k)
       scene.objects.push_back(parse_object(rd, objects[k], k));

@@ -214,7 +214,7 @@ RigConfig RigConfig::from_yaml_text(const std::string& text, const std::string& 
 
 RigConfig RigConfig::from_yaml_file(const std::filesystem::path& path) {
   // Whole-file read through core (names the file and the OS reason, refuses a directory).
-  const std::vector<std::uint8_t> bytes = read_file_bytes(path);
+  const std::vector<std::uint8_t> bytes = read_file_bytes(path, kMaxConfigFileBytes);
   return from_yaml_text(std::string(bytes.begin(), bytes.end()), path.string());
 }
 

@@ -15,7 +15,7 @@ namespace scanmesh::sim::detail {
 
 //! The whole file as text; IoError "cannot open '<path>': <OS reason>" when it cannot be read.
 inline std::string read_text_file(const std::filesystem::path& path) {
-  const std::vector<std::uint8_t> bytes = read_file_bytes(path);
+  const std::vector<std::uint8_t> bytes = read_file_bytes(path, kMaxConfigFileBytes);
   return std::string(bytes.begin(), bytes.end());
 }
 

@@ -142,8 +142,17 @@ class SessionReader final : public ScanStepSource {
   ScanStep step(std::size_t i) const override;
   const SessionManifest& manifest() const { return manifest_; }
   bool complete() const { return manifest_.steps.size() == manifest_.header.step_count; }
-  //! Reads one frame and checks its CRC. Throws FileFormatError on a damaged frame.
+  //! Reads one frame and checks its CRC. Throws FileFormatError on a damaged frame (also one
+  //! that is a symbolic link: a session's frames are its own files).
   Image8 frame(std::size_t step, std::size_t k) const;
+
+  struct Damage {
+    std::size_t step;    //!< the first step with a missing, unreadable or wrong frame
+    std::string reason;  //!< what is wrong, naming the file
+  };
+  //! Reads every recorded frame (size, decoding, CRC): the first damaged step, if any. Before a
+  //! resume, so that a damaged recording is re-captured instead of found by the replay.
+  std::optional<Damage> first_damaged_step() const;
 
  private:
   std::filesystem::path folder_;

@@ -53,7 +53,54 @@ class StagedFiles {
   bool committed_ = false;
 };
 
+//! A command's output folder. The constructor creates it at once (before any work, so an
+//! existing file of that name or an uncreatable path fails in a second, not after a long run)
+//! and throws IoError naming it. Destroyed without keep() (the command failed), it removes the
+//! folders this run created, as far as they are still empty: a failed command leaves no new
+//! folder behind.
+class OutputFolder {
+ public:
+  explicit OutputFolder(std::filesystem::path dir);
+  OutputFolder(const OutputFolder&) = delete;
+  OutputFolder& operator=(const OutputFolder&) = delete;
+  ~OutputFolder();
+  const std::filesystem::path& path() const { return dir_; }
+  //! The command succeeded: the folder stays.
+  void keep() { kept_ = true; }
+
+ private:
+  std::filesystem::path dir_;
+  std::vector<std::filesystem::path> created_;  // innermost last
+  bool kept_ = false;
+};
+
+//! For outputs that cannot be staged (an OBJ names its .mtl after its own file name): remembers
+//! which of `paths` do not exist yet and removes those again when destroyed without keep(), so a
+//! command that fails half way leaves no new file (each file is still written atomically).
+class NewFilesGuard {
+ public:
+  explicit NewFilesGuard(const std::vector<std::filesystem::path>& paths);
+  NewFilesGuard(const NewFilesGuard&) = delete;
+  NewFilesGuard& operator=(const NewFilesGuard&) = delete;
+  ~NewFilesGuard();
+  void keep() { kept_ = true; }
+
+ private:
+  std::vector<std::filesystem::path> new_;
+  bool kept_ = false;
+};
+
 //! Reads a whole file. Throws IoError if it cannot be opened or read.
-std::vector<std::uint8_t> read_file_bytes(const std::filesystem::path& path);
+//! Only regular files (a symbolic link to one is fine): a device, FIFO or socket is refused
+//! with FileFormatError before a byte is read (a frame linked to /dev/zero would never end), and
+//! so is a file larger than `max_bytes`.
+inline constexpr std::size_t kMaxInputFileBytes = std::size_t{4} << 30;
+//! Line and feature files (SVG, JSON, text): 64 MiB.
+inline constexpr std::size_t kMaxTextInputBytes = std::size_t{64} << 20;
+//! YAML/JSON configurations (scene, scanner, rig, regions): 2 MiB; their parser holds ~140
+//! bytes per byte of text (a 5 MB scene took 700 MB).
+inline constexpr std::size_t kMaxConfigFileBytes = std::size_t{2} << 20;
+std::vector<std::uint8_t> read_file_bytes(const std::filesystem::path& path,
+                                          std::size_t max_bytes = kMaxInputFileBytes);
 
 }  // namespace scanmesh

@@ -14,6 +14,9 @@ namespace scanmesh {
 inline constexpr std::uint32_t kGridFileVersion = 1;
 //! Largest grid a reader accepts (cells); protects against allocation bombs in hostile files.
 inline constexpr std::uint64_t kMaxGridCells = 1ull << 26;
+//! Largest length a grid may hold (mm: |h0|, the top row's height, dh, a radius): 1 km. Beyond it
+//! a file is not a scan, and coordinates that large break every spacing-based grid downstream.
+inline constexpr double kMaxGridLengthMm = 1e6;
 
 //! Serialises every field of the grid (sizes, phi0, h0, dh, radius, validity, confidence,
 //! colour, metadata) and appends a CRC-32 of all preceding bytes.

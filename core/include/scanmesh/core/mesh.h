@@ -40,4 +40,8 @@ struct Mesh {
   void compute_vertex_normals();
 };
 
+//! One flag per face: its three corner positions (as a set) repeat an earlier face's. Lets
+//! drawing and intersection tests treat n copies of one triangle as one (O(F log F)).
+std::vector<char> faces_repeating_earlier_geometry(const Mesh& mesh);
+
 }  // namespace scanmesh

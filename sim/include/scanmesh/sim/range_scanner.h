@@ -15,6 +15,8 @@
 namespace scanmesh::sim {
 
 struct ScannerConfig {
+  //! Largest simulated grid (cells), so that a simulation stays below 1 GB of memory.
+  static constexpr long long kMaxSimulatedCells = 1ll << 22;
   int n_phi = 512, n_h = 512;
   double radius_mm = 300.0;  //!< scanner circle R (rays start here)
   double h0_mm = 0.0;        //!< height of row 0

@@ -56,6 +56,8 @@ class SceneObject {
 
 class Scene {
  public:
+  //! Most objects a scene file may hold (every ray is tested against each).
+  static constexpr std::size_t kMaxObjects = 1000;
   //! Parses a scene YAML file / text. Throws FileFormatError (naming the source and the key)
   //! for malformed YAML, unknown shape types, missing or impossible parameters.
   static Scene from_yaml_file(const std::filesystem::path& path);
