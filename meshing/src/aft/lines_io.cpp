@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "scanmesh/core/atomic_file.h"
 #include "scanmesh/core/errors.h"
 #include "scanmesh/meshing/aft/animation_lines.h"
 
@@ -496,11 +497,8 @@ LineSet parse_lines_json(std::string_view text, const std::string& file) {
 }
 
 LineSet read_lines(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError("cannot read animation lines '" + path.string() + "'");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const std::string text = ss.str();
+  const std::vector<std::uint8_t> bytes = read_file_bytes(path, kMaxTextInputBytes);
+  const std::string text(bytes.begin(), bytes.end());
   std::string ext = path.extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   if (ext == ".json") return parse_lines_json(text, path.string());

@@ -2,17 +2,25 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <initializer_list>
 #include <sstream>
 #include <utility>
 
+#include "scanmesh/core/atomic_file.h"
 #include "scanmesh/core/errors.h"
 #include "scanmesh/meshing/aft/regions.h"
 
 namespace scanmesh::aft {
 
 namespace {
+
+std::string short_mm(double v) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%g mm", v);
+  return buffer;
+}
 
 double number(const YAML::Node& n, const std::string& file, const std::string& key) {
   double v = 0;
@@ -170,15 +178,18 @@ RegionSettings parse_region_settings(std::string_view source, const std::string&
   }
   if (s.min_unit_mm > s.default_unit_mm)
     throw FileFormatError(file, "min_unit_mm is larger than unit_mm");
+  // The same floor for every region's own unit: below it the front would take millions of
+  // steps (a 0.05 mm unit on a head: minutes), which min_unit_mm exists to prevent.
+  for (const RegionRule& rule : s.regions)
+    if (rule.unit_mm && *rule.unit_mm < s.min_unit_mm)
+      throw FileFormatError(file, rule.name + ".unit_mm " + short_mm(*rule.unit_mm) +
+                                      " is below min_unit_mm " + short_mm(s.min_unit_mm));
   return s;
 }
 
 RegionSettings read_region_settings(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError("cannot read region settings '" + path.string() + "'");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_region_settings(ss.str(), path.string());
+  const std::vector<std::uint8_t> bytes = read_file_bytes(path, kMaxConfigFileBytes);
+  return parse_region_settings(std::string(bytes.begin(), bytes.end()), path.string());
 }
 
 void apply_region_settings(RegionGraph& g, const RegionSettings& s, const ScanSurface& surface) {

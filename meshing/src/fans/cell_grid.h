@@ -13,24 +13,64 @@
 
 namespace scanmesh::fans_detail {
 
+//! The points' bounding box without its far outliers, per axis: the 1 % .. 99 % quantile range
+//! widened by four interquartile ranges, within the true box. A scan's stray point at 1e20 (or
+//! a few) falls outside; a real object's tails stay inside. Quantiles of at most 65,536 evenly
+//! strided points, so the cost stays O(n) and small.
+inline std::pair<Eigen::Vector3d, Eigen::Vector3d> robust_box(
+    const std::vector<Eigen::Vector3d>& points) {
+  const std::size_t n = points.size();
+  const std::size_t stride = std::max<std::size_t>(1, n / 65536);
+  std::vector<double> v;
+  v.reserve(n / stride + 1);
+  Eigen::Vector3d lo, hi;
+  for (int a = 0; a < 3; ++a) {
+    v.clear();
+    double mn = points[0][a], mx = points[0][a];
+    for (const auto& p : points) {
+      mn = std::min(mn, p[a]);
+      mx = std::max(mx, p[a]);
+    }
+    for (std::size_t i = 0; i < n; i += stride) v.push_back(points[i][a]);
+    auto quantile = [&](double q) {
+      const auto k = static_cast<std::ptrdiff_t>(q * static_cast<double>(v.size() - 1));
+      std::nth_element(v.begin(), v.begin() + k, v.end());
+      return v[static_cast<std::size_t>(k)];
+    };
+    const double q01 = quantile(0.01), q25 = quantile(0.25), q75 = quantile(0.75),
+                 q99 = quantile(0.99);
+    const double iqr = q75 - q25;
+    lo[a] = std::max(mn, std::min(q01, q25 - 4.0 * iqr));
+    hi[a] = std::min(mx, std::max(q99, q75 + 4.0 * iqr));
+    if (!std::isfinite(hi[a] - lo[a])) lo[a] = hi[a] = q25;  // the box itself overflows
+  }
+  return {lo, hi};
+}
+
 class CellGrid {
  public:
   //! `cell_edge` is the seed's l; it is enlarged when the grid would have more than 8 cells per
   //! point (degenerate, very flat bounding boxes), which keeps memory O(n).
+  //! The grid spans `robust_box(points)`: far outliers fall into the border cells, which reach to
+  //! infinity, so one point at 1e20 neither makes the grid astronomically large nor puts every
+  //! other point into one cell.
   CellGrid(const std::vector<Eigen::Vector3d>& points, double cell_edge) : points_(points) {
-    lo_ = points[0];
-    Eigen::Vector3d hi = points[0];
-    for (const auto& p : points) {
-      lo_ = lo_.cwiseMin(p);
-      hi = hi.cwiseMax(p);
-    }
+    const auto [lo, hi] = robust_box(points);
+    lo_ = lo;
     cell_ = cell_edge;
     const double limit = 8.0 * static_cast<double>(points.size()) + 64.0;
     while (true) {
-      for (int a = 0; a < 3; ++a)
-        dims_[a] = static_cast<int>(std::floor((hi[a] - lo_[a]) / cell_)) + 1;
-      if (static_cast<double>(dims_[0]) * dims_[1] * dims_[2] <= limit) break;
-      cell_ *= 1.25;
+      double cells = 1.0;  // in double: the int dimensions are formed only once they fit
+      std::array<double, 3> extent{};
+      for (int a = 0; a < 3; ++a) {
+        extent[a] = std::floor((hi[a] - lo_[a]) / cell_) + 1.0;
+        cells *= extent[a];
+      }
+      if (cells <= limit) {
+        for (int a = 0; a < 3; ++a) dims_[a] = static_cast<int>(extent[a]);
+        break;
+      }
+      cell_ *= std::max(1.25, 0.9 * std::cbrt(cells / limit));
     }
     const std::size_t cells = static_cast<std::size_t>(dims_[0]) * dims_[1] * dims_[2];
     start_.assign(cells + 1, 0);
@@ -61,7 +101,9 @@ class CellGrid {
     // cube); the slack absorbs the rounding of a point's cell index near a cell face.
     const double slack = 1e-7 * cell_;
     auto gap2 = [&](int axis, int i) {
-      const double lo = lo_[axis] + i * cell_, hi = lo + cell_;
+      // Border cells also hold the points beyond the box (coord() clamps them).
+      const double lo = i == 0 ? -kHuge : lo_[axis] + i * cell_;
+      const double hi = i == dims_[axis] - 1 ? kHuge : lo_[axis] + (i + 1) * cell_;
       const double g = std::max({lo - c[axis], c[axis] - hi, 0.0});
       const double gs = std::max(0.0, g - slack);
       return gs * gs;
@@ -115,6 +157,7 @@ class CellGrid {
 
  private:
   static constexpr double kPi = 3.14159265358979323846;
+  static constexpr double kHuge = 1e300;
 
   std::size_t points_in_cell_of(const Eigen::Vector3d& p) const {
     const auto c = coord(p);

@@ -12,7 +12,10 @@
 #include <cmath>
 #include <deque>
 #include <limits>
+#include <numeric>
 #include <string>
+#include <tuple>
+#include <vector>
 
 #include "cell_grid.h"
 #include "scanmesh/core/errors.h"
@@ -112,11 +115,8 @@ struct Context {
 };
 
 double cell_edge_formula(const std::vector<Vector3d>& pts, int k) {
-  Vector3d lo = pts[0], hi = pts[0];
-  for (const auto& p : pts) {
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-  }
+  // The box without far outliers: one stray point must not make the cells enormous.
+  const auto [lo, hi] = fans_detail::robust_box(pts);
   const Vector3d d = hi - lo;
   const double area = 2.0 * (d.x() * d.y() + d.y() * d.z() + d.x() * d.z());
   double l = std::sqrt(area * k / static_cast<double>(pts.size()));
@@ -1258,7 +1258,8 @@ void FanOptions::validate() const {
   if (!(max_normal_angle_deg >= 0 && max_normal_angle_deg <= 180))
     fail("max_normal_angle_deg must be in [0, 180]");
   if (max_hole_edges < 0) fail("max_hole_edges must be >= 0");
-  if (threads < 0) fail("threads must be >= 0");
+  if (threads < 0 || threads > kMaxThreads)
+    fail("threads must be in 0.." + std::to_string(kMaxThreads) + " (0: all cores)");
 }
 
 std::vector<Vector3d> estimate_fan_normals(const std::vector<Vector3d>& input,
@@ -1276,8 +1277,8 @@ std::vector<Vector3d> estimate_fan_normals(const std::vector<Vector3d>& input,
 
 namespace {
 
-FanResult build_fans_impl(const std::vector<Vector3d>& input, const FanOptions& options,
-                          const std::vector<Eigen::Vector3f>* given_normals) {
+FanResult build_fans_distinct(const std::vector<Vector3d>& input, const FanOptions& options,
+                              const std::vector<Eigen::Vector3f>* given_normals) {
   check_input(input, options);
   // Internally the points are in cell order; indices are mapped back at the end.
   const std::vector<int> perm = cell_order(input, options.k);
@@ -1290,11 +1291,7 @@ FanResult build_fans_impl(const std::vector<Vector3d>& input, const FanOptions& 
   auto t0 = std::chrono::steady_clock::now();
   Context ctx(points, options, cell_edge_formula(points, options.k));
   st.cell_edge = ctx.grid.cell_edge();
-  Vector3d lo = points[0], hi = points[0];
-  for (const auto& p : points) {
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-  }
+  const auto [lo, hi] = fans_detail::robust_box(points);
   ctx.eps_len = 1e-9 * (hi - lo).norm();  // Gap (4b): "falls on c"
   ctx.d_max = options.dmax_factor * st.cell_edge;
   std::vector<Eigen::Vector3f> given_sorted;
@@ -1438,6 +1435,51 @@ FanResult build_fans_impl(const std::vector<Vector3d>& input, const FanOptions& 
   st.unused_points = static_cast<std::size_t>(std::count(used.begin(), used.end(), 0));
   st.seconds_assembly = seconds_since(t0);
   return result;
+}
+
+// Exact duplicates are meshed once: n copies of one point would all share one grid cell and
+// make every neighbour query there O(n) (50,000 copies: minutes), and they add nothing.
+FanResult build_fans_impl(const std::vector<Vector3d>& input, const FanOptions& options,
+                          const std::vector<Eigen::Vector3f>* given_normals) {
+  check_input(input, options);
+  const int n = static_cast<int>(input.size());
+  std::vector<int> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  const auto key = [&](int i) { return std::tuple(input[i].x(), input[i].y(), input[i].z(), i); };
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return key(a) < key(b); });
+  // Sorted by position then index, so each group of copies starts with its smallest index.
+  std::vector<int> group_first(n);  // input index -> the first input index at its position
+  std::vector<int> first;           // those first indices, in input order after the sort below
+  for (int k = 0; k < n; ++k) {
+    const int i = order[k];
+    if (k == 0 || input[i] != input[order[k - 1]]) first.push_back(i);
+    group_first[i] = first.back();
+  }
+  if (first.size() == static_cast<std::size_t>(n))
+    return build_fans_distinct(input, options, given_normals);
+  if (first.size() == 1) throw InvalidInputError("build_fans: all points coincide");
+  std::sort(first.begin(), first.end());  // the distinct points keep the input's order
+  std::vector<int> rank(n, -1);            // first input index -> index among the distinct
+  for (std::size_t d = 0; d < first.size(); ++d) rank[first[d]] = static_cast<int>(d);
+  std::vector<Vector3d> points(first.size());
+  std::vector<Eigen::Vector3f> normals;
+  for (std::size_t d = 0; d < first.size(); ++d) points[d] = input[first[d]];
+  if (given_normals)
+    for (int i : first) normals.push_back((*given_normals)[i]);
+  FanResult r = build_fans_distinct(points, options, given_normals ? &normals : nullptr);
+
+  // Back to input indices: each triangle on the first copies, every copy gets their normal.
+  Mesh mesh;
+  mesh.positions = input;
+  for (const auto& t : r.mesh.triangles)
+    mesh.triangles.push_back({first[t[0]], first[t[1]], first[t[2]]});
+  mesh.normals.resize(n);
+  for (int i = 0; i < n; ++i) mesh.normals[i] = r.mesh.normals[rank[group_first[i]]];
+  r.mesh = std::move(mesh);
+  r.stats.points = input.size();
+  r.stats.duplicate_points = input.size() - first.size();
+  r.stats.unused_points += r.stats.duplicate_points;
+  return r;
 }
 
 }  // namespace

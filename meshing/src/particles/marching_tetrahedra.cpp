@@ -19,10 +19,14 @@ Mesh marching_tetrahedra(const ImplicitSurface& surface, double spacing) {
   const Eigen::AlignedBox3d box = surface.bounds();
   const Vector3d lo = box.min() - Vector3d::Constant(spacing);
   const Vector3d extent = box.max() - box.min() + Vector3d::Constant(2 * spacing);
+  // The node count in double first: a tiny spacing overflows any integer product.
+  double nodes = 1.0;
+  for (int a = 0; a < 3; ++a) nodes *= std::ceil(extent[a] / spacing) + 1.0;
+  if (!(nodes <= 60'000'000.0))
+    throw InvalidInputError("marching_tetrahedra: grid too fine for the bounds (> 6e7 nodes; "
+                            "edge length too small for the scene)");
   std::array<long long, 3> n{};
   for (int a = 0; a < 3; ++a) n[a] = static_cast<long long>(std::ceil(extent[a] / spacing)) + 1;
-  if (n[0] * n[1] * n[2] > 60'000'000LL)
-    throw InvalidInputError("marching_tetrahedra: grid too fine for the bounds (> 6e7 nodes)");
   auto node_index = [&](long long i, long long j, long long k) {
     return (k * n[1] + j) * n[0] + i;
   };

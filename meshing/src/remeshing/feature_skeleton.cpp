@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 
+#include "scanmesh/core/atomic_file.h"
 #include "scanmesh/core/errors.h"
 
 namespace scanmesh::remeshing {
@@ -99,11 +100,8 @@ FeatureLines parse_feature_lines(const std::string& text, const std::string& nam
 }
 
 FeatureLines read_feature_lines(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError("cannot open feature lines " + path.string());
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return parse_feature_lines(ss.str(), path.string());
+  const std::vector<std::uint8_t> bytes = read_file_bytes(path, kMaxTextInputBytes);
+  return parse_feature_lines(std::string(bytes.begin(), bytes.end()), path.string());
 }
 
 std::string format_feature_lines(const FeatureLines& lines) {

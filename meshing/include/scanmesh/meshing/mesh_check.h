@@ -28,6 +28,9 @@ struct MeshCheckReport {
   std::size_t self_intersections = 0;    //!< intersecting face pairs (touching along shared
                                          //!< corners/edges is not counted)
   bool self_intersections_checked = false;
+  //! Why the test did not run although asked for (empty otherwise): faces crowding one place so
+  //! that the pair tests would grow quadratically (intersecting_face_pairs' budget).
+  std::string self_intersections_not_checked_reason;
   // Quality: min angle per face, and q = 4 sqrt(3) A / (l1^2 + l2^2 + l3^2), 1 = equilateral.
   double min_angle_deg = 0, mean_min_angle_deg = 0;
   double min_quality = 0, mean_quality = 0;
@@ -78,10 +81,15 @@ std::vector<PropertyVerdict> mesh_verdicts(const MeshCheckReport& report);
 //! `involved` (one flag per face) only the pairs with at least one flagged face.
 std::size_t count_intersecting_faces(const Mesh& mesh, const std::vector<int>* labels = nullptr,
                                      const std::vector<char>* involved = nullptr);
-//! The same pairs themselves (f < g, sorted).
+//! The same pairs themselves (f < g, sorted). Faces repeating an earlier face's corner positions
+//! take no part (check_mesh counts them as duplicates), so n copies of one triangle cost O(n).
+//! `max_candidate_pairs` bounds the work: when the cells of the broad phase would hold more
+//! face pairs than that (faces crowding one place, e.g. a fan of 100,000 triangles), nothing is
+//! tested and `*complete` (if given) is set to false.
 std::vector<std::array<int, 2>> intersecting_face_pairs(
     const Mesh& mesh, const std::vector<int>* labels = nullptr,
-    const std::vector<char>* involved = nullptr);
+    const std::vector<char>* involved = nullptr,
+    std::size_t max_candidate_pairs = static_cast<std::size_t>(-1), bool* complete = nullptr);
 
 //! Faces f and g (indices into P) intersect improperly: more than touching at shared corners or
 //! along a shared edge (the self-intersection predicate of check_mesh; double precision).

@@ -42,6 +42,9 @@ struct FanOptions {
   bool orient_away_from_axis = false;
   std::uint64_t seed = 1;  //!< picks the start point of the normal orientation (determinism)
   int threads = 0;         //!< OpenMP threads; 0: default. Output does not depend on it.
+  //! More threads than this are refused: each costs a stack and per-thread buffers, and no
+  //! machine this runs on has more cores.
+  static constexpr int kMaxThreads = 256;
 
   //! Throws InvalidInputError for impossible values.
   void validate() const;
@@ -49,6 +52,9 @@ struct FanOptions {
 
 struct FanStats {
   std::size_t points = 0;
+  //! Points at exactly the position of an earlier point: meshed once (the first of them);
+  //! the others stay as vertices in no triangle.
+  std::size_t duplicate_points = 0;
   double cell_edge = 0.0;              //!< l
   std::size_t pca_fallbacks = 0;       //!< fans rebuilt with a PCA normal
   std::size_t open_fans = 0;           //!< fans with a gap >= 180 deg at d_max (boundary)
