@@ -2,7 +2,9 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <iostream>
 #include <new>
@@ -10,6 +12,44 @@
 #include "scanmesh/core/errors.h"
 
 namespace scanmesh::cli {
+
+namespace {
+
+// The number in `text`, or NaN when it is not one (the option's own parser reports that).
+double parse_number(const std::string& text) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  return end == text.c_str() ? std::nan("") : v;
+}
+
+std::string short_number(double v) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%g", v);
+  return buffer;
+}
+
+CLI::Validator bounded(double lo, double hi, bool open_below) {
+  const std::string range = (open_below ? "(" : "[") + short_number(lo) + ", " +
+                            short_number(hi) + "]";
+  return CLI::Validator(
+      [lo, hi, open_below, range](std::string& text) -> std::string {
+        const double v = parse_number(text);
+        const bool ok = std::isfinite(v) && (open_below ? v > lo : v >= lo) && v <= hi;
+        return ok ? std::string() : "value " + text + " is not in " + range;
+      },
+      "in " + range);
+}
+
+}  // namespace
+
+void require_in_range(const std::string& option, double value, double lo, double hi) {
+  if (std::isfinite(value) && value >= lo && value <= hi) return;
+  throw InvalidInputError(option + " must be in [" + short_number(lo) + ", " + short_number(hi) +
+                          "], not " + short_number(value));
+}
+
+CLI::Validator in_range(double lo, double hi) { return bounded(lo, hi, false); }
+CLI::Validator above(double lo, double hi) { return bounded(lo, hi, true); }
 
 int run_guarded(const std::function<int()>& command) {
   try {

@@ -1,6 +1,7 @@
 // Shared plumbing of the scanmesh command line: exit codes, error mapping, progress display.
 #pragma once
 
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <functional>
 #include <string>
@@ -21,6 +22,18 @@ enum ExitCode : int {
   kMeshIncomplete = 9,   //!< `scanmesh animesh`: written, but with open fronts or failing its check
   kRequirementNotMet = 10,  //!< `scanmesh check --require`: a required property does not hold
 };
+
+//! Numeric option checks. Unlike CLI11's Range / PositiveNumber / NonNegativeNumber they refuse
+//! NaN and infinities (every comparison with NaN is false, so those let it through) and name the
+//! bounds in short form (CLI11 prints DBL_MAX with all its 309 digits). A failed check is a usage
+//! error (exit 2) naming the option.
+CLI::Validator in_range(double lo, double hi);
+//! lo < value <= hi.
+CLI::Validator above(double lo, double hi);
+
+//! Throws InvalidInputError (exit 3) "OPTION must be in [lo, hi], not VALUE" unless lo <= value
+//! <= hi and value is finite: for commands that check their options together in code.
+void require_in_range(const std::string& option, double value, double lo, double hi);
 
 //! Runs a command; maps scanmesh's typed errors to an exit code and one line on stderr.
 int run_guarded(const std::function<int()>& command);

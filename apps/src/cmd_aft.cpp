@@ -206,9 +206,7 @@ int run_animesh(const AnimeshArgs& a) {
   const aft::AnimationMeshQuality q = aft::evaluate_quality(am, *l.surface, 6, &l.graph);
   const MeshCheckReport check = check_mesh(am.mesh);
   const std::filesystem::path out(a.out);
-  std::error_code ec;
-  std::filesystem::create_directories(out, ec);
-  if (ec) throw IoError("cannot create output directory '" + out.string() + "': " + ec.message());
+  OutputFolder folder(out);
   // The outputs appear together or not at all: a write that fails half way (a full disk) must
   // not leave this run's mesh next to an earlier run's report.
   StagedFiles outputs;
@@ -303,8 +301,9 @@ int run_animesh(const AnimeshArgs& a) {
                 {"duplicate_faces", check.duplicate_faces},
                 {"self_intersections", check.self_intersections},
                 {"boundary_loops", check.topology.boundary_loops}};
-  write_file_atomically(outputs.stage(out / "animesh.json"), j.dump(2) + "\n");
+  write_file_atomically(outputs.stage(out / "animesh.json"), j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
   outputs.commit();
+  folder.keep();
   std::cout << border_text(l) << l.graph.to_text() << am.mesh.positions.size() << " vertices ("
             << steiner << " Steiner points), " << am.mesh.triangles.size()
             << " triangles, meshed in " << t_mesh << " s\n"

@@ -52,18 +52,20 @@ int run_curvature(const CurvatureArgs& args) {
   Stopwatch t;
   const RangeGrid grid = read_grid(args.grid);
   timings["read_s"] = t.seconds();
+  const std::filesystem::path dir = args.out;
+  OutputFolder folder(dir);  // before the work: a bad --out fails at once
 
   t = Stopwatch();
   const SurfaceFields fields = compute_fields(grid, method, args.radius_mm);
   timings["compute_s"] = t.seconds();
 
   t = Stopwatch();
-  const std::filesystem::path dir = args.out;
-  ensure_directory(dir);
+  // The six outputs appear together or not at all (a failure half way leaves none of them).
+  StagedFiles outputs;
   nlohmann::json files = nlohmann::json::array();
   const auto written = [&](const char* name) {
     files.push_back(name);
-    return dir / name;
+    return outputs.stage(dir / name);
   };
   write_fields(written("fields.smf"), fields);
 
@@ -109,7 +111,10 @@ int run_curvature(const CurvatureArgs& args) {
                                  {"files", files},
                                  {"timings", timings},
                                  {"versions", versions()}};
-  write_file_atomically(dir / "curvature.json", report.dump(2) + "\n");
+  write_file_atomically(outputs.stage(dir / "curvature.json"), report.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+
+  outputs.commit();
+  folder.keep();
 
   std::ostringstream line;
   line << "curvature (" << to_string(method) << "): " << defined << " of " << grid.valid_count()

@@ -141,7 +141,7 @@ GridProducts write_grid_products(const std::filesystem::path& out, const RangeGr
 int run_demo(const DemoArgs& args) {
   if (args.device.enabled) return run_device_demo(args);
   const std::filesystem::path out(args.out);
-  ensure_directory(out);
+  OutputFolder folder(out);
   nlohmann::json timings;
   Stopwatch total;
 
@@ -181,7 +181,7 @@ int run_demo(const DemoArgs& args) {
       {"files",
        {"scan_raw.smg", "scan.smg", "scan.pcd", "mesh.ply", "mesh.obj", "mesh.mtl", "texture.png",
         "depth.png", "render.png", "fields.smf", "curvature.png", "report.json"}}};
-  write_file_atomically(out / "report.json", report.dump(2) + "\n");
+  write_file_atomically(out / "report.json", report.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
 
   std::cout << "scanmesh demo: " << scene.name << ", " << grid.n_phi() << " x " << grid.n_h()
             << " grid, " << grid.valid_count() << " valid cells after cleaning\n"
@@ -193,6 +193,7 @@ int run_demo(const DemoArgs& args) {
             << "  outputs in " << out.string()
             << "/: mesh.ply mesh.obj mesh.mtl texture.png depth.png"
             << " render.png curvature.png fields.smf scan.smg scan_raw.smg scan.pcd report.json\n";
+  folder.keep();
   return 0;
 }
 

@@ -65,24 +65,25 @@ void add_device_demo_options(CLI::App& demo, DeviceDemoArgs& a) {
                 "reconstruction (instead of the direct range simulator)");
   demo.add_option("--steps", a.steps, "--device-sim: turntable steps per turn")
       ->capture_default_str()
-      ->check(CLI::Range(4, 100000));
+      ->check(in_range(4, 100000));
   demo.add_option("--size", a.size, "--device-sim: camera frame size WIDTHxHEIGHT")
       ->capture_default_str();
   demo.add_option("--n-phi", a.n_phi, "--device-sim: grid columns")
       ->capture_default_str()
-      ->check(CLI::Range(8, 8192));
+      ->check(in_range(8, 8192));
   demo.add_option("--n-h", a.n_h, "--device-sim: grid rows")
       ->capture_default_str()
-      ->check(CLI::Range(8, 8192));
+      ->check(in_range(8, 8192));
   demo.add_option("--h0", a.h0_mm, "--device-sim: height of grid row 0 (mm)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(in_range(-1e6, 1e6));
   demo.add_option("--dh", a.dh_mm, "--device-sim: grid row spacing (mm)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(above(0, 1e6));
   demo.add_option("--time-scale", a.time_scale,
                   "--device-sim: simulated device time per real second (board moves, settling)")
       ->capture_default_str()
-      ->check(CLI::Range(1e-6, 1.0));
+      ->check(in_range(1e-6, 1.0));
 }
 
 int run_device_demo(const DemoArgs& args) {
@@ -93,7 +94,7 @@ int run_device_demo(const DemoArgs& args) {
         "the device path takes --steps, --size and the grid options");
   parse_frame_size(d.size);  // fail before any work
   const fs::path out(args.out);
-  ensure_directory(out);
+  OutputFolder folder(out);
   nlohmann::json timings;
   Stopwatch total, t;
 
@@ -192,7 +193,7 @@ int run_device_demo(const DemoArgs& args) {
        {"session/", "calibration.yaml", "scan.smg", "direct.smg", "scan.pcd", "mesh.ply",
         "mesh.obj", "mesh.mtl", "texture.png", "depth.png", "render.png", "fields.smf",
         "curvature.png", "report.json"}}};
-  write_file_atomically(out / "report.json", report.dump(2) + "\n");
+  write_file_atomically(out / "report.json", report.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
 
   std::cout << "scanmesh demo --device-sim: " << scene.name << ", " << grid.n_phi() << " x "
             << grid.n_h() << " grid, " << grid.valid_count() << " valid cells\n"
@@ -205,6 +206,7 @@ int run_device_demo(const DemoArgs& args) {
             << "/: session/ calibration.yaml scan.smg direct.smg mesh.ply mesh.obj texture.png "
                "depth.png render.png curvature.png report.json ("
             << timings["total_s"].get<double>() << " s)\n";
+  folder.keep();
   return kSuccess;
 }
 

@@ -93,7 +93,7 @@ int run_devices(const DevicesArgs& args) {
           {{"bus", b.bus}, {"address", b.address}, {"id", id}, {"kind", b.kind}});
     }
     j["tty"] = ttys;
-    std::cout << j.dump(2) << "\n";
+    std::cout << j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
     return kSuccess;
   }
   std::cout << "cameras:\n";
@@ -123,14 +123,31 @@ std::unique_ptr<drivers::Transport> open_board_transport(const std::string& boar
   return drivers::open_usb_transport(o);
 }
 
+// Every numeric option of `scan`, checked before a device is opened (exit 3 naming the option).
+void validate_scan_args(const ScanArgs& a) {
+  require_in_range("--steps", a.steps, 1, 100000);
+  require_in_range("--lasers", a.lasers, 0, 2);
+  if (!(a.time_scale > 0) || a.time_scale > 1)
+    throw InvalidInputError("--time-scale must be in (0, 1]");
+  if (!(a.fps > 0)) throw InvalidInputError("--fps must be above 0");
+  require_in_range("--fps", a.fps, 0, 1000);
+  require_in_range("--buffers", a.buffers, 1, 32);
+  require_in_range("--settle", a.settle_s, 0, 3600);
+  require_in_range("--discard", a.discard, 0, 100);
+  if (!(a.feed > 0)) throw InvalidInputError("--feed must be above 0");
+  require_in_range("--feed", a.feed, 0, 3600);
+  require_in_range("--baud", a.baud, 300, 4000000);
+  if (a.pose_wait_s != -1) require_in_range("--pose-wait", a.pose_wait_s, 0, 3600);
+}
+
 int run_scan(const ScanArgs& a) {
   if (a.out.empty()) throw InvalidInputError("--out SESSION is required");
+  validate_scan_args(a);
   if (a.sim == (!a.device.empty() || !a.board.empty()))
     throw InvalidInputError("give either --sim or both --device and --board");
   if (!a.sim && (a.device.empty() || a.board.empty()))
     throw InvalidInputError("a hardware scan needs --device CAM and --board BOARD");
   if (!a.faults.empty() && !a.sim) throw InvalidInputError("--sim-fault needs --sim");
-  if (a.steps < 1 || a.steps > 100000) throw InvalidInputError("--steps must be 1..100000");
   std::optional<CalibrationSessionInfo> cal_plan;
   if (a.calibration) {
     if (!a.scene.empty()) throw InvalidInputError("--calibration shows the board, not a --scene");
@@ -138,9 +155,6 @@ int run_scan(const ScanArgs& a) {
   }
   const std::size_t planned_steps =
       cal_plan ? cal_plan->step_count() : static_cast<std::size_t>(a.steps);
-  if (a.lasers < 0 || a.lasers > 2) throw InvalidInputError("--lasers must be 0, 1 or 2");
-  if (!(a.time_scale > 0) || a.time_scale > 1)
-    throw InvalidInputError("--time-scale must be in (0, 1]");
   const auto [width, height] = parse_frame_size(a.size);
   const drivers::PixelFormat format =
       drivers::parse_pixel_format(a.format.empty() ? (a.sim ? "rgb24" : "yuyv") : a.format);
@@ -174,6 +188,15 @@ int run_scan(const ScanArgs& a) {
           "--resume: steps, lasers, size, format, storage and --sim must "
           "match the session in '" +
           out.string() + "'");
+    // Every recorded frame is read back first: a damaged one is captured again (with all
+    // steps after it), never left for the replay to find.
+    if (const auto damage = SessionReader(out).first_damaged_step()) {
+      std::size_t from = damage->step;
+      if (h.calibration) from = h.calibration->first_step(h.calibration->step(from).first);
+      std::cout << "scan: step " << damage->step << " is damaged (" << damage->reason
+                << "); capturing again from step " << from << "\n";
+      session->rewind(from);
+    }
     if (h.calibration && !session->complete()) {
       // The board may have moved while the scan was stopped: the interrupted pose starts over.
       session->rewind(h.calibration->first_step(h.calibration->step(session->steps_done()).first));
@@ -300,9 +323,7 @@ int run_replay(const ReplayArgs& a) {
     throw InvalidInputError("--columns must be 1..100");
   const SessionReader reader(a.session);
   const fs::path out = a.out;
-  std::error_code ec;
-  fs::create_directories(out, ec);
-  if (ec) throw IoError("cannot create '" + out.string() + "': " + ec.message());
+  OutputFolder folder(out);
   const auto& header = reader.manifest().header;
   const std::size_t n = reader.step_count();
   // Contact sheet: one tile per step, the frame with every laser's line (the max over the
@@ -349,9 +370,10 @@ int run_replay(const ReplayArgs& a) {
                            {"camera", header.camera.card},
                            {"board_firmware", header.board_firmware},
                            {"steps", steps}};
-  write_file_atomically(out / "replay.json", report.dump(2) + "\n");
+  write_file_atomically(out / "replay.json", report.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
   std::cout << "replay: " << n << " of " << header.step_count << " steps, "
             << n * (header.laser_count + 1) << " frames verified -> " << out.string() << "\n";
+  folder.keep();
   return kSuccess;
 }
 
@@ -418,7 +440,9 @@ void register_devices_commands(CLI::App& app, CommandList& commands) {
   replay->add_option("session", r->session, "Session folder")->required();
   replay->add_option("--out", r->out, "Output folder")->required();
   replay->add_flag("--frames", r->frames, "Also export every frame as PNG");
-  replay->add_option("--columns", r->sheet_columns, "Contact sheet columns")->capture_default_str();
+  replay->add_option("--columns", r->sheet_columns, "Contact sheet columns")
+      ->capture_default_str()
+      ->check(in_range(1, 1000));
   commands.push_back({replay, [r] { return run_replay(*r); }});
 }
 

@@ -33,6 +33,7 @@ nlohmann::json fans_report_json(const std::string& input, const PointCloud& clou
       {"input_colours", cloud.has_colors()},
       {"input_normals", cloud.has_normals()},
       {"triangles", r.mesh.face_count()},
+      {"duplicate_points", s.duplicate_points},
       {"seconds", {{"normals", s.seconds_normals},
                    {"fans", s.seconds_fans},
                    {"assembly", s.seconds_assembly}}},
@@ -90,7 +91,7 @@ int run_fans(const FansArgs& args) {
     write_quality_histogram_png(outputs.stage(args.histogram_png), report);
   if (!args.report.empty())
     write_file_atomically(outputs.stage(args.report),
-                          fans_report_json(args.cloud, cloud, result, report).dump(2) + "\n");
+                          fans_report_json(args.cloud, cloud, result, report).dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
   outputs.commit();
   std::cout << std::fixed << std::setprecision(3) << "fans: " << s.points << " points -> "
             << result.mesh.face_count() << " triangles in "

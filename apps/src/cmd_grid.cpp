@@ -55,7 +55,7 @@ void print_text(const nlohmann::json& j, const std::string& indent = "") {
       print_text(value, indent + "  ");
     } else {
       std::cout << indent << key << ": "
-                << (value.is_string() ? value.get<std::string>() : value.dump()) << "\n";
+                << (value.is_string() ? value.get<std::string>() : value.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace)) << "\n";
     }
   }
 }
@@ -65,7 +65,7 @@ void print_text(const nlohmann::json& j, const std::string& indent = "") {
 int run_info(const InfoArgs& args) {
   const nlohmann::json j = describe(args.file);
   if (args.json)
-    std::cout << j.dump(2) << "\n";
+    std::cout << j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
   else
     print_text(j);
   return 0;

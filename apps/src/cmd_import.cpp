@@ -53,7 +53,7 @@ ImportOptions import_options(const ImportArgs& a) {
     if (o.axis_direction.norm() == 0) throw InvalidInputError("--axis must not be 0,0,0");
   }
   if (!a.axis_point.empty()) o.axis_point = parse_vector(a.axis_point, "--axis-point");
-  if (a.n_phi < 0 || a.n_h < 0 || !(a.dh >= 0))
+  if (a.n_phi < 0 || a.n_h < 0 || !(a.dh >= 0 && a.dh <= 1e6))
     throw InvalidInputError("--n-phi, --n-h and --dh must be positive (0 or absent: automatic)");
   if (a.n_phi == 1 || a.n_h == 1) throw InvalidInputError("--n-phi and --n-h must be at least 2");
   o.n_phi = a.n_phi;
@@ -124,7 +124,7 @@ int run_import(const ImportArgs& a) {
   StagedFiles outputs;
   write_grid(outputs.stage(a.out), r.grid);
   if (!a.report.empty())
-    write_file_atomically(outputs.stage(a.report), report_json(r, a.input).dump(2) + "\n");
+    write_file_atomically(outputs.stage(a.report), report_json(r, a.input).dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
   if (!a.texture_png.empty()) export_texture_png(outputs.stage(a.texture_png), r.grid);
   if (!a.depth_png.empty()) export_depth_png(outputs.stage(a.depth_png), r.grid);
   outputs.commit();

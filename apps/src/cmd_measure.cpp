@@ -184,7 +184,7 @@ int run_measure(const MeasureArgs& a) {
   }
   report["pass"] = verdict.pass;
   report["failures"] = verdict.failures;
-  if (!a.report.empty()) write_file_atomically(a.report, report.dump(2) + "\n");
+  if (!a.report.empty()) write_file_atomically(a.report, report.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
   if (verdict.pass) {
     std::printf(
         "check-calibration: PASS (within +- %.3f mm radius, %.3f mm RMS, +- %.3f mm "
@@ -216,28 +216,29 @@ void register_measure_commands(CLI::App& app, CommandList& commands) {
       ->capture_default_str();
   cmd->add_option("--steps", a->steps, "--sim: turntable steps per turn")
       ->capture_default_str()
-      ->check(CLI::Range(4, 100000));
+      ->check(in_range(4, 100000));
   cmd->add_option("--sphere-radius", a->sphere_radius_mm, "Nominal probing-sphere radius (mm)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(above(0, 1e6));
   cmd->add_option("--ball-radius", a->ball_radius_mm, "Nominal dumbbell ball radius (mm)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(above(0, 1e6));
   cmd->add_option("--spacing", a->ball_spacing_mm, "Nominal dumbbell centre distance (mm)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(above(0, 1e6));
   cmd->add_option("--max-radius-error", a->max_radius_error_mm, "Tolerance (mm)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(above(0, 1e6));
   cmd->add_option("--max-rms", a->max_rms_mm, "Tolerance (mm)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(above(0, 1e6));
   cmd->add_option("--max-spacing-error", a->max_spacing_error_mm, "Tolerance (mm)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(above(0, 1e6));
   cmd->add_option("--min-height", a->min_height_mm,
                   "Points lower than this above the platter are left out (mm)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(in_range(-1e6, 1e6));
   cmd->add_option("--report", a->report, "Also write the measurements as JSON");
   commands.push_back({cmd, [a] { return run_measure(*a); }});
 }

@@ -82,7 +82,7 @@ int run_particles(const ParticlesArgs& args) {
     throw InvalidInputError("particles: give either a SCENE.yaml or --grid GRID.smg");
   if (!(args.edge > 0.0)) throw InvalidInputError("particles: --edge must be positive");
   const std::filesystem::path out(args.out);
-  ensure_directory(out);
+  OutputFolder folder(out);
   particles::ParticleOptions o{.edge_length = args.edge, .adaptive = args.adaptive};
   o.flips = !args.no_flips;
   o.seed = args.seed;
@@ -120,11 +120,12 @@ int run_particles(const ParticlesArgs& args) {
     report["converged"] = converged;
     report["mesh"] = mesh_json(mesh);
     report["seconds"] = watch.seconds();
-    write_file_atomically(out / "particles.json", report.dump(2) + "\n");
+    write_file_atomically(out / "particles.json", report.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
     std::cout << "particles: " << mesh.vertex_count() << " vertices, " << mesh.face_count()
               << " triangles after " << iterations << " iterations ("
               << (converged ? "converged" : "NOT converged: iteration limit") << ") -> "
               << out.string() << "\n";
+    folder.keep();
     return 0;
   }
 
@@ -163,9 +164,10 @@ int run_particles(const ParticlesArgs& args) {
   report["mode"] = "animation";
   report["frames"] = list;
   report["seconds"] = watch.seconds();
-  write_file_atomically(out / "particles.json", report.dump(2) + "\n");
+  write_file_atomically(out / "particles.json", report.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
   std::cout << "particles: " << frames.size() << " frames, last "
             << frames.back().mesh.vertex_count() << " vertices -> " << out.string() << "\n";
+  folder.keep();
   return 0;
 }
 

@@ -1,5 +1,6 @@
 // `scanmesh remesh`: seed 001 adaptive remeshing with feature skeleton (docs/remeshing.md).
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 #include <Eigen/Geometry>
 #include <cmath>
 #include <filesystem>
@@ -120,6 +121,7 @@ int run_remesh(const RemeshArgs& a) {
   using namespace remeshing;
   PrepareStats ps;
   const Mesh raw = read_mesh(a.mesh);
+  OutputFolder folder(a.out);  // before the work: a bad --out fails at once
   const PrepareOptions po = choose_prepare(raw, a);
   const Mesh input = prepare_input(raw, po, &ps);
   print_prepare_stats(po, ps);
@@ -165,14 +167,16 @@ int run_remesh(const RemeshArgs& a) {
   const RemeshResult r = remesh(input, o);
   progress->finish();
   require_vertex_count(r, a.vertices, input_loops);
-  std::filesystem::create_directories(a.out);
   const std::filesystem::path dir(a.out);
-  write_ply(dir / "mesh.ply", r.mesh);
-  if (a.write_prepared) write_ply(dir / "prepared.ply", input);
+  StagedFiles outputs;  // all outputs or none
+  write_ply(outputs.stage(dir / "mesh.ply"), r.mesh);
+  if (a.write_prepared) write_ply(outputs.stage(dir / "prepared.ply"), input);
   const RemeshQuality q = evaluate_remesh(input, r, !a.no_intersections);
   const RemeshStats& s = r.stats;
   std::ostringstream json;
-  json << "{\n\"input\": \"" << a.mesh << "\",\n\"target_vertices\": " << a.vertices
+  json << "{\n\"input\": "
+       << nlohmann::json(a.mesh).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace)
+       << ",\n\"target_vertices\": " << a.vertices
        << ",\n\"scheme\": \"" << a.scheme << "\",\n\"gamma\": " << o.density.gamma
        << ",\n\"n_filter\": " << a.filter << ",\n\"curvature_radius\": "
        << o.density.curvature_radius << ",\n\"gradation\": " << o.density.gradation
@@ -203,10 +207,12 @@ int run_remesh(const RemeshArgs& a) {
        << ", \"seconds_regularize\": " << s.seconds_regularize
        << ", \"seconds_smooth\": " << s.seconds_smooth << ", \"seconds_total\": " << s.seconds_total
        << "},\n\"quality\": " << q.to_json() << "}\n";
-  write_file_atomically(dir / "report.json", json.str());
-  write_png(dir / "quality.png", render_quality(r));
-  write_png(dir / "histograms.png", quality_histograms(q));
-  write_png(dir / "density.png", render_density(input, r.density));
+  write_file_atomically(outputs.stage(dir / "report.json"), json.str());
+  write_png(outputs.stage(dir / "quality.png"), render_quality(r));
+  write_png(outputs.stage(dir / "histograms.png"), quality_histograms(q));
+  write_png(outputs.stage(dir / "density.png"), render_density(input, r.density));
+  outputs.commit();
+  folder.keep();
   std::cout << std::fixed << std::setprecision(3) << "remesh: " << s.input_vertices << " -> "
             << s.output_vertices << " vertices, " << s.output_faces << " faces in "
             << s.seconds_total << " s\n"
@@ -241,29 +247,39 @@ void register_remesh_commands(CLI::App& app, CommandList& commands) {
   c->add_option("mesh", args->mesh, "Input mesh (.ply with face labels kept, .off, .obj, .stl)")
       ->required()
       ->check(CLI::ExistingFile);
-  c->add_option("--vertices", args->vertices, "Target vertex count")->required();
+  c->add_option("--vertices", args->vertices, "Target vertex count")->required()
+      ->check(in_range(4, 1e8));
   c->add_option("--features", args->features,
                 "Feature lines file (docs/formats.md) or 'auto' (sharp edges by dihedral angle)");
   c->add_option("--sharp", args->sharp_deg,
-                "Dihedral angle (deg) of sharp edges for --features auto");
+                "Dihedral angle (deg) of sharp edges for --features auto")
+      ->check(in_range(0, 180));
   c->add_option("--kink-angle", args->kink_deg,
-                "Turn (deg) of a skeleton chain that makes a fixed branch vertex (thesis: 60)");
+                "Turn (deg) of a skeleton chain that makes a fixed branch vertex (thesis: 60)")
+      ->check(in_range(0, 180));
   c->add_option("--kink-reach", args->kink_reach,
-                "Arc length (mm) over which kinks are measured (0: the mean target edge length)");
-  c->add_option("--gamma", args->gamma, "Density contrast gamma (0: uniform)");
-  c->add_option("--filter", args->filter, "n_filter smoothing passes of the density");
-  c->add_option("--clip", args->clip, "Max ratio of target edge length to its median");
+                "Arc length (mm) over which kinks are measured (0: the mean target edge length)")
+      ->check(in_range(0, 1e6));
+  c->add_option("--gamma", args->gamma, "Density contrast gamma (0: uniform)")
+      ->check(in_range(0, 10));
+  c->add_option("--filter", args->filter, "n_filter smoothing passes of the density")
+      ->check(in_range(0, 1000));
+  c->add_option("--clip", args->clip, "Max ratio of target edge length to its median")
+      ->check(in_range(1, 1000));
   c->add_flag("--uniform", args->uniform, "Uniform density (same as --gamma 0)");
   c->add_option("--curvature-radius", args->curvature_radius,
                 "Radius (mm) the density's curvature is fitted over (-1: the output's mean edge "
-                "length; 0: the input's 2-ring, as seed 001)");
+                "length; 0: the input's 2-ring, as seed 001)")
+      ->check(in_range(-1, 1e6));
   c->add_option("--gradation", args->gradation,
                 "Largest slope of the target edge length over the surface (0: no limit)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(in_range(0, 1000));
   c->add_option("--scheme", args->scheme, "regularize | lloyd")
       ->check(CLI::IsMember({"regularize", "lloyd"}));
-  c->add_option("--theta-dist", args->theta_dist, "E_dist threshold (deg)");
-  c->add_option("--theta-glatt", args->theta_glatt, "E_glatt threshold (deg)");
+  c->add_option("--theta-dist", args->theta_dist, "E_dist threshold (deg)")
+      ->check(in_range(0, 180));
+  c->add_option("--theta-glatt", args->theta_glatt, "E_glatt threshold (deg)")
+      ->check(in_range(0, 180));
   c->add_flag("--no-intersections", args->no_intersections,
               "Skip the self-intersection test of the report");
   auto* prepare = c->add_flag("--prepare", args->force_prepare,
@@ -275,13 +291,16 @@ void register_remesh_commands(CLI::App& app, CommandList& commands) {
       ->excludes(prepare);
   c->add_option("--min-component", args->min_component,
                 "Drop connected components with fewer faces before remeshing (0: keep all; "
-                "default: the clean-up's area rule)");
+                "default: the clean-up's area rule)")
+      ->check(in_range(0, 1e9));
   c->add_option("--fill-holes", args->fill_holes,
                 "Close boundary loops with at most this many edges before remeshing (0: none; "
-                "default: the clean-up's perimeter rule)");
+                "default: the clean-up's perimeter rule)")
+      ->check(in_range(0, 1e6));
   c->add_option("--needle-angle", args->needle_angle,
                 "Repair input triangles with a min angle below this (deg): degenerate faces "
-                "dropped, needles welded, caps flipped (0: off)");
+                "dropped, needles welded, caps flipped (0: off)")
+      ->check(in_range(0, 60));
   c->add_flag("--remove-spikes", args->remove_spikes,
               "Strip one-triangle-wide spikes and strands of a ragged border and the smaller "
               "fans at pinch vertices before remeshing");
@@ -291,17 +310,21 @@ void register_remesh_commands(CLI::App& app, CommandList& commands) {
               "Do not refuse operations whose faces cut a neighbouring face (for measuring)");
   c->add_option("--tip-angle", args->tip_angle,
                 "With --remove-spikes: border tips sharper than this (deg) over one target edge "
-                "length are removed");
+                "length are removed")
+      ->check(in_range(0, 180));
   c->add_option("--polish-rounds", args->polish_rounds,
-                 "Angle polish rounds after the smoothing (0: off; docs/remeshing.md)");
+                 "Angle polish rounds after the smoothing (0: off; docs/remeshing.md)")
+      ->check(in_range(0, 1000));
   c->add_option("--polish-angle", args->polish_angle,
-                 "The polish works on faces whose min angle is below this (deg)");
+                 "The polish works on faces whose min angle is below this (deg)")
+      ->check(in_range(0, 60));
   c->add_option("--polish-flip-cost", args->polish_flip_cost,
-                 "Largest valence cost (rise of R) of a polish flip; 4 = a flip in a regular patch");
+                 "Largest valence cost (rise of R) of a polish flip; 4 = a flip in a regular patch")
+      ->check(in_range(0, 1000));
   c->add_option("--polish-floor", args->polish_floor,
                 "Faces still below this min angle (deg) after the polish get more rounds with "
                 "the normal error bounds widened (0: off)")
-      ->check(CLI::Range(0.0, 60.0));
+      ->check(in_range(0, 60));
   c->add_flag("--write-prepared", args->write_prepared,
               "Also write the cleaned-up input the remesher saw (DIR/prepared.ply)");
   c->add_option("--out", args->out, "Output directory")->required();

@@ -180,16 +180,16 @@ void register_vision_commands(CLI::App& app, CommandList& commands) {
                       "Simulated frame size WIDTHxHEIGHT (the built-in rig scaled, as scan --sim)");
   cal_cmd->add_option("--handheld", cal->handheld, "Hand-held board views")
       ->capture_default_str()
-      ->check(CLI::Range(0, 100));
+      ->check(in_range(0, 100));
   cal_cmd->add_option("--poses", cal->poses, "--sim: board placements on the platter")
       ->capture_default_str()
-      ->check(CLI::Range(1, kMaxPlatterPoses));
+      ->check(in_range(1, kMaxPlatterPoses));
   cal_cmd->add_option("--angle-step", cal->angle_step_deg, "Platter views every this (deg)")
       ->capture_default_str()
-      ->check(CLI::Range(1.0, 90.0));
+      ->check(in_range(1.0, 90.0));
   cal_cmd->add_option("--angle-max", cal->angle_max_deg, "Platter views within +- this (deg)")
       ->capture_default_str()
-      ->check(CLI::Range(0.0, 85.0));
+      ->check(in_range(0.0, 85.0));
   cal_cmd->add_option("-o,--out", cal->out, "Calibration YAML to write")->required();
   commands.push_back({cal_cmd, [cal] { return run_calibrate(*cal); }});
 
@@ -205,21 +205,23 @@ void register_vision_commands(CLI::App& app, CommandList& commands) {
       ->check(CLI::ExistingFile);
   rec_cmd->add_option("--steps", rec->steps, "Turntable steps per turn")
       ->capture_default_str()
-      ->check(CLI::Range(1, 100000));
+      ->check(in_range(1, 100000));
   ReconstructArgs& c = rec->common;
   rec_cmd->add_option("--calib", c.calib, "Calibration YAML")->required()->check(CLI::ExistingFile);
   rec_cmd->add_option("--method", c.method, "Peak method: com, gaussian, blais-rioux")
       ->capture_default_str();
   rec_cmd->add_option("--n-phi", c.n_phi, "Grid columns")
       ->capture_default_str()
-      ->check(CLI::Range(2, 8192));
+      ->check(in_range(2, 8192));
   rec_cmd->add_option("--n-h", c.n_h, "Grid rows")
       ->capture_default_str()
-      ->check(CLI::Range(2, 8192));
-  rec_cmd->add_option("--h0", c.h0_mm, "Height of row 0 (mm)")->capture_default_str();
+      ->check(in_range(2, 8192));
+  rec_cmd->add_option("--h0", c.h0_mm, "Height of row 0 (mm)")
+      ->capture_default_str()
+      ->check(in_range(-1e6, 1e6));
   rec_cmd->add_option("--dh", c.dh_mm, "Row spacing (mm)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(above(0, 1e6));
   rec_cmd->add_flag("!--no-clean", c.clean, "Do not clean the assembled grid");
   rec_cmd->add_option("-o,--out", c.out, "Output grid file (.smg)")->required();
   commands.push_back(

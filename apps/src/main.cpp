@@ -13,21 +13,21 @@ void add_cleaning_options(CLI::App& cmd, scanmesh::CleaningOptions& o) {
   cmd.add_option("--spike-mm", o.spike_threshold_mm,
                  "Spike threshold above the neighbour median (mm)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(in_range(0, 1e4));
   cmd.add_option("--spike-spread", o.spike_spread_factor,
                  "Extra threshold in units of the prediction spread")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(in_range(0, 1e3));
   cmd.add_option("--min-fragment", o.min_component_cells, "Pieces with fewer cells are removed")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(in_range(1, 1e8));
 }
 
 void add_mesh_options(CLI::App& cmd, scanmesh::GridMeshOptions& o) {
   cmd.add_option("--max-jump", o.max_depth_jump_mm,
                  "No triangles across depth jumps above this (mm)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(above(0, 1e6));
   cmd.add_flag("!--open-seam", o.close_seam, "Do not connect the last phi column to the first");
 }
 
@@ -47,7 +47,7 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   sim_cmd->add_option("--seed", sim.seed, "Random seed of all defects");
   sim_cmd->add_option("--noise", sim.noise_sigma_mm, "Range noise sigma (mm)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(in_range(0, 1e3));
   sim_cmd->add_option("-o,--out", sim.out, "Output grid file (.smg)")->required();
 
   InfoArgs info;
@@ -72,7 +72,7 @@ int main(int argc, char** argv) {
   clean_cmd
       ->add_option("--fill-holes", clean.fill_holes,
                    "Afterwards fill interior holes of at most this many cells (0: off)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(in_range(0, 1e8))
       ->default_val(0);
 
   GridMeshArgs gm;
@@ -91,11 +91,13 @@ int main(int argc, char** argv) {
   render_cmd->add_option("-o,--out", render.out, "Output PNG")->required();
   render_cmd->add_option("--size", render.size, "Image size in pixels")
       ->capture_default_str()
-      ->check(CLI::Range(16, 8192));
+      ->check(in_range(16, 8192));
   render_cmd->add_option("--azimuth", render.azimuth_deg, "Camera azimuth (deg)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(in_range(-360, 360));
   render_cmd->add_option("--elevation", render.elevation_deg, "Camera elevation (deg)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(in_range(-90, 90));
   render_cmd->add_flag("--wireframe", render.wireframe, "Draw triangle edges");
 
   CurvatureArgs curv;
@@ -112,7 +114,7 @@ int main(int argc, char** argv) {
       ->add_option("--radius", curv.radius_mm,
                    "Neighbourhood radius of the quadric fit (mm; 0: default)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(in_range(0, 1e4));
 
   FansArgs fans;
   auto* fans_cmd = app.add_subcommand(
@@ -121,28 +123,36 @@ int main(int argc, char** argv) {
       ->required();
   fans_cmd->add_option("-o,--out", fans.out, "Output mesh (.ply)")->required();
   fans_cmd->add_option("--alpha", fans.options.alpha_deg, "Completeness angle (deg)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(in_range(30, 179.9));
   fans_cmd->add_option("--dmax", fans.options.dmax_factor, "Largest search radius (x cell edge)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(above(0, 100));
   fans_cmd->add_option("--k", fans.options.k, "Expected points per grid cell")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(in_range(1, 1000));
   fans_cmd->add_option("--max-edge", fans.options.max_edge, "Longest edge (input units; 0: off)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(in_range(0, 1e9));
   fans_cmd
       ->add_option("--max-edge-factor", fans.options.max_edge_factor,
                    "Longest edge as a multiple of the local spacing (0: off)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(in_range(0, 1e6));
   fans_cmd
       ->add_option("--max-normal-angle", fans.options.max_normal_angle_deg,
                    "Largest angle between neighbouring normals (deg; 0: off)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(in_range(0, 180));
   fans_cmd
       ->add_option("--max-hole", fans.options.max_hole_edges,
                    "Close holes left between fans up to this many edges (0: off)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(in_range(0, 1e6));
   fans_cmd->add_flag("--pca-normals", fans.options.pca_normals, "PCA normals for every point");
   fans_cmd->add_option("--threads", fans.options.threads, "Threads (0: all)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(in_range(0, scanmesh::FanOptions::kMaxThreads));
   fans_cmd->add_option("--render", fans.render_png, "Shaded picture of the mesh (PNG)");
   fans_cmd->add_option("--histogram", fans.histogram_png, "Min-angle histogram (PNG)");
   fans_cmd->add_option("--report", fans.report,
@@ -170,14 +180,14 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   particles_cmd->add_option("--edge", particles.edge, "Target edge length R (mm)")
       ->required()
-      ->check(CLI::PositiveNumber);
+      ->check(above(0, 1e6));
   particles_cmd->add_flag("--adaptive", particles.adaptive, "Curvature-adaptive rest lengths");
   particles_cmd->add_option("--frames", particles.frames, "Frames of an animated scene")
       ->capture_default_str()
-      ->check(CLI::Range(1, 100000));
+      ->check(in_range(1, 100000));
   particles_cmd->add_option("--steps", particles.steps_per_frame, "Iterations per frame")
       ->capture_default_str()
-      ->check(CLI::Range(1, 100000));
+      ->check(in_range(1, 100000));
   particles_cmd->add_flag("--no-flips", particles.no_flips, "Disable edge flips to valence 6");
   particles_cmd->add_option("--seed", particles.seed, "Random seed")->capture_default_str();
   particles_cmd->add_option("-o,--out", particles.out, "Output folder")->required();

@@ -121,12 +121,4 @@ nlohmann::json versions() {
                             std::to_string(NLOHMANN_JSON_VERSION_PATCH)}};
 }
 
-void ensure_directory(const std::filesystem::path& dir) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec || !std::filesystem::is_directory(dir))
-    throw IoError("cannot create output directory " + dir.string() + ": " +
-                  (ec ? ec.message() : "a file of that name exists"));
-}
-
 }  // namespace scanmesh::cli

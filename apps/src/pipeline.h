@@ -53,7 +53,4 @@ struct GridProducts {
 GridProducts write_grid_products(const std::filesystem::path& out, const RangeGrid& grid,
                                  const GridMeshOptions& meshing, nlohmann::json& timings);
 
-//! Creates the directory (and parents). Throws IoError naming it on failure.
-void ensure_directory(const std::filesystem::path& dir);
-
 }  // namespace scanmesh::cli
