@@ -134,6 +134,37 @@ std::vector<Case> cases() {
          return std::vector<std::string>{"fans", (d / "far.xyz").string(), "--out",
                                          (d / "far.ply").string()};
        }},
+      // Animation lines on a fully scanned cylinder (made once in main): one closed polyline of
+      // n points, and n/2 short open subpaths of one SVG path.
+      {"regions: one polyline of n points", 10000,
+       [](std::size_t n, const fs::path& d) {
+         std::string pts;
+         for (std::size_t i = 0; i < n; ++i) {
+           const double a = 6.283185307 * static_cast<double>(i) / static_cast<double>(n);
+           pts += std::to_string(1024 + 300 * std::cos(a)) + "," +
+                  std::to_string(512 + 300 * std::sin(a)) + " ";
+         }
+         write_text(d / "long.svg", "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"2048\" "
+                                    "height=\"1024\"><polygon points=\"" + pts + "\"/></svg>");
+         return std::vector<std::string>{"regions", (d / "cylinder.smg").string(), "--lines",
+                                         (d / "long.svg").string()};
+       }},
+      {"regions: n/2 subpaths of one path", 5000,
+       [](std::size_t n, const fs::path& d) {
+         std::string path_data;
+         const std::size_t count = n / 2, per_row = 200;
+         for (std::size_t i = 0; i < count; ++i) {
+           const double x = 20.0 + 10.0 * static_cast<double>(i % per_row);
+           const double y = 150.0 + 700.0 * static_cast<double>(i / per_row) /
+                                        static_cast<double>(count / per_row + 1);
+           path_data += "M " + std::to_string(x) + " " + std::to_string(y) + " L " +
+                        std::to_string(x + 3) + " " + std::to_string(y) + " ";
+         }
+         write_text(d / "many.svg", "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"2048\" "
+                                    "height=\"1024\"><path d=\"" + path_data + "\"/></svg>");
+         return std::vector<std::string>{"regions", (d / "cylinder.smg").string(), "--lines",
+                                         (d / "many.svg").string()};
+       }},
   };
 }
 
@@ -146,6 +177,16 @@ int main(int argc, char** argv) {
   const fs::path dir = fs::temp_directory_path() / ("scanmesh_bench_hostile_" +
                                                     std::to_string(getpid()));
   fs::create_directories(dir);
+  write_text(dir / "cylinder_scanner.yaml",
+             "n_phi: 2048\nn_h: 1024\nradius_mm: 300.0\nh0_mm: 10.0\ndh_mm: 0.15\n"
+             "noise_sigma_mm: 0.0\nspike_probability: 0.0\nseed: 3\n");
+  if (run_scanmesh({"sim", "--scene", (kConfigs / "sim" / "cylinder.yaml").string(), "--scanner",
+                    (dir / "cylinder_scanner.yaml").string(), "--out",
+                    (dir / "cylinder.smg").string()})
+          .exit_code != 0) {
+    std::fprintf(stderr, "bench_hostile: could not simulate the cylinder grid\n");
+    return 1;
+  }
   // The binary's start-up (shared libraries: ~0.2 s) is measured once and taken off every time,
   // so that the ratios show the work on the input.
   const double startup = run_scanmesh({"--version"}).seconds;
