@@ -130,10 +130,10 @@ int main(int argc, char** argv) {
   const sim::SimulatedScan scan = sim::simulate_scan(sim::builtin_head_scene(), config);
   const RangeGrid& grid = scan.grid;
   const ScanSurface surface(grid);
-  const aft::LineSet lines = aft::read_lines(src + "/configs/sim/head-lines.svg");
+  const aft::LineSet lines = aft::read_lines(src + "/configs/sim/head-lines.svg", grid.n_h());
   aft::RegionGraph g = aft::analyze_regions(lines, surface);
   const aft::RegionSettings settings =
-      aft::read_region_settings(src + "/configs/sim/head-regions.yaml");
+      aft::read_region_settings(src + "/configs/sim/head-regions.yaml", grid.n_h());
   aft::apply_region_settings(g, settings, surface);
   if (argc > 2 && std::string(argv[1]) == "--fine-runs") {
     const double scale = argc > 3 ? std::atof(argv[3]) : 0.25;

@@ -210,6 +210,10 @@ RangeGrid make_grid(const std::vector<CylSample>& samples, double cell_mm,
     throw InvalidInputError("a grid of " + std::to_string(n_phi) + " x " + std::to_string(n_h) +
                             " cells is larger than " + std::to_string(kMaxGridCells) +
                             "; give a smaller --n-phi / --n-h or a larger --dh");
+  if (dh < kMinGridLengthMm)
+    throw InvalidInputError("a row height of " + std::to_string(dh) +
+                            " is below the 1e-9 a grid may hold: give a larger --dh (or scale "
+                            "the scan to millimetres)");
   // Row 0 at the lowest sample: h_j = hmin + j dh covers the data with cell centres on it.
   return RangeGrid(n_phi, n_h, 0.0, hmin, dh);
 }
@@ -306,6 +310,15 @@ TurnCoverage turn_coverage(const RangeGrid& grid) {
   return c;
 }
 
+// A scan without colours gets one light neutral grey in every cell: black (the grid's default)
+// rendered every imported shape as a black silhouette; grey shades like clay and reads as
+// "no colour" on the texture (docs/acquisition.md, "Importing scans").
+constexpr Rgb8 kUncolouredGrey{190, 190, 190};
+
+void paint_uncoloured(RangeGrid& g) {
+  std::fill(g.colors().begin(), g.colors().end(), kUncolouredGrey);
+}
+
 ImportResult grid_from_cloud(const PointCloud& input, const ImportOptions& options,
                              const std::filesystem::path& source) {
   const PointCloud cloud = input.organised() ? input.finite_points() : input;
@@ -326,6 +339,7 @@ ImportResult grid_from_cloud(const PointCloud& input, const ImportOptions& optio
   out.report.cell_mm = kCloudCellPerSpacing * out.report.sample_spacing_mm;
   out.grid = make_grid(cyl, out.report.cell_mm, options, source);
   RangeGrid& g = out.grid;
+  if (!out.report.colors) paint_uncoloured(g);
 
   std::vector<Binned> bins;
   bins.reserve(cyl.size());
@@ -359,8 +373,10 @@ ImportResult grid_from_cloud(const PointCloud& input, const ImportOptions& optio
     const int i = static_cast<int>(bins[b].cell % g.n_phi());
     const int j = static_cast<int>(bins[b].cell / g.n_phi());
     const double n = static_cast<double>(le - lb);
-    g.set_sample(i, j, static_cast<float>(median(layer_r)),
-                 static_cast<float>(std::min(1.0, n / kFullConfidenceSamples)));
+    const float radius = static_cast<float>(median(layer_r));
+    b = e;
+    if (!(radius >= kMinGridLengthMm)) continue;  // on the axis: no cell a grid may hold
+    g.set_sample(i, j, radius, static_cast<float>(std::min(1.0, n / kFullConfidenceSamples)));
     if (cloud.has_colors()) {
       rgb /= n;
       g.set_color(i, j, {static_cast<std::uint8_t>(std::lround(rgb.x())),
@@ -368,7 +384,6 @@ ImportResult grid_from_cloud(const PointCloud& input, const ImportOptions& optio
                          static_cast<std::uint8_t>(std::lround(rgb.z()))});
     }
     out.report.samples_used += le - lb;
-    b = e;
   }
   finish(out, frame, source);
   return out;
@@ -484,6 +499,7 @@ ImportResult grid_from_mesh(const Mesh& input, const Image8* texture, const Impo
   out.report.cell_mm = kMeshCellPerSpacing * out.report.sample_spacing_mm;
   out.grid = make_grid(cyl, out.report.cell_mm, options, source);
   RangeGrid& g = out.grid;
+  if (!out.report.colors) paint_uncoloured(g);
   const double d = g.dphi();
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     const auto& tri = mesh.triangles[t];
@@ -523,7 +539,9 @@ ImportResult grid_from_mesh(const Mesh& input, const Image8* texture, const Impo
       for (int ii = i0; ii <= i1; ++ii) {
         const int i = g.wrap_phi(ii);
         const auto hit = cast(corners, g.phi(i), g.h(j));
-        if (!hit || (g.valid(i, j) && g.radius(i, j) >= hit->t)) continue;
+        if (!hit || !(static_cast<float>(hit->t) >= kMinGridLengthMm) ||
+            (g.valid(i, j) && g.radius(i, j) >= hit->t))
+          continue;
         g.set_sample(i, j, static_cast<float>(hit->t),
                      static_cast<float>(std::clamp(hit->cos_incidence, 0.05, 1.0)));
         if (const auto c = hit_color(mesh, out.report.textured ? texture : nullptr, t, hit->u,

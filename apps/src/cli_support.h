@@ -4,6 +4,8 @@
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <functional>
+#include <nlohmann/json.hpp>
+#include <ostream>
 #include <string>
 
 namespace scanmesh::cli {
@@ -35,7 +37,30 @@ CLI::Validator above(double lo, double hi);
 //! <= hi and value is finite: for commands that check their options together in code.
 void require_in_range(const std::string& option, double value, double lo, double hi);
 
-//! Runs a command; maps scanmesh's typed errors to an exit code and one line on stderr.
+//! How a command reports (docs/cli.md, "Output"): lines of text for people (the default); one
+//! JSON object on stdout for programs (--json: the result's fields, numbers as numbers, plus
+//! "exit_code" and, on failure, "error"); or nothing but the error line (--quiet). Progress bars
+//! go to stderr and only when it is a terminal; --quiet turns them off too.
+enum class OutputMode { Text, Json, Quiet };
+void set_output_mode(OutputMode mode);
+OutputMode output_mode();
+//! Where commands write their lines of text: stdout in Text mode, discarded otherwise.
+std::ostream& say();
+//! printf-style text to say().
+void sayf(const char* format, ...) __attribute__((format(printf, 1, 2)));
+//! The command's result, filled by the command as it goes; printed by run_guarded in Json mode.
+nlohmann::json& result();
+//! Adds --json and --quiet to every subcommand of `app` (a command that already has --json,
+//! such as info, keeps its own flag, which then sets the same mode).
+void add_output_flags(CLI::App& app);
+//! The mode the parsed flags of the chosen subcommand ask for.
+OutputMode parsed_output_mode(const CLI::App& app);
+//! JSON text of a report or result (indented; bytes that are not UTF-8, e.g. from a grid's
+//! metadata, become U+FFFD instead of throwing).
+std::string json_text(const nlohmann::json& j, int indent = 2);
+
+//! Runs a command; maps scanmesh's typed errors to an exit code and one line on stderr. In Json
+//! mode it then prints result() with "exit_code" (and "error") on stdout.
 int run_guarded(const std::function<int()>& command);
 
 //! A one-line progress bar on stderr when stderr is a terminal; silent otherwise, so logs and

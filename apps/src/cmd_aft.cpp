@@ -1,6 +1,7 @@
 // `scanmesh regions` and `scanmesh animesh`: seed 000's animation meshes (docs/animation-meshes.md,
 // docs/cli.md).
 #include <CLI/CLI.hpp>
+#include <cctype>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -13,8 +14,10 @@
 #include "scanmesh/core/grid_export.h"
 #include "scanmesh/core/grid_file.h"
 #include "scanmesh/core/image.h"
+#include "scanmesh/core/image_text.h"
 #include "scanmesh/core/mesh_io.h"
 #include "scanmesh/core/render.h"
+#include "scanmesh/core/texture_layout.h"
 #include "scanmesh/meshing/aft/animesh.h"
 #include "scanmesh/meshing/aft/data_border.h"
 #include "scanmesh/meshing/mesh_check.h"
@@ -28,12 +31,13 @@ namespace {
 using Eigen::Vector2d;
 
 // data_border: "" = not given (the settings file's data_border, else auto).
+// line_rows: how the files' y coordinates count ("top": the convention, "bottom": older files).
 struct RegionsArgs {
-  std::string grid, lines, settings, png, data_border;
+  std::string grid, lines, settings, png, data_border, line_rows = "top";
 };
 
 struct AnimeshArgs {
-  std::string grid, lines, settings, out, data_border;
+  std::string grid, lines, settings, out, data_border, line_rows = "top";
   std::optional<std::uint64_t> seed;
   std::string strategy;
 };
@@ -62,11 +66,35 @@ void draw_segment(Image8& im, Vector2d a, Vector2d b, Rgb8 c) {
   }
 }
 
-Image8 texture_of(const RangeGrid& grid) { return texture_image(grid); }
+// The texture in the grid pixel frame (row j = h index j), in which the region graph's
+// geometry is drawn; the finished picture is turned upright (core/texture_layout.h).
+Image8 texture_in_grid_rows(const RangeGrid& grid) {
+  Image8 im = texture_image(grid);
+  flip_rows(im);
+  return im;
+}
+
+std::string upper_case(std::string text) {
+  for (char& c : text) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return text;
+}
+
+// Pixels of region r on the row through grid pixel p, left and right of it (at most the width).
+int region_run_width(const aft::RegionLocator& locate, const ScanSurface& surface, Vector2d p,
+                     std::size_t r, int width) {
+  int run = 1;
+  for (const int step : {-1, 1})
+    for (int k = 1; k < width && run < width; ++k) {
+      const auto at = locate.region_at(aft::pixel_to_param(surface, p + Vector2d(step * k, 0)));
+      if (!at || *at != static_cast<int>(r)) break;
+      ++run;
+    }
+  return run;
+}
 
 Image8 draw_regions(const RangeGrid& grid, const ScanSurface& surface, const aft::RegionGraph& g,
                     const aft::LineSet& lines) {
-  Image8 im = texture_of(grid);
+  Image8 im = texture_in_grid_rows(grid);
   // Region fill: each pixel centre classified by the graph (openings hatched dark).
   const aft::RegionLocator locate(g);
   for (int y = 0; y < im.height; ++y)
@@ -90,19 +118,32 @@ Image8 draw_regions(const RangeGrid& grid, const ScanSurface& surface, const aft
       draw_segment(im, aft::param_to_pixel(surface, seg.pts[k]),
                    aft::param_to_pixel(surface, seg.pts[k + 1]), c);
   }
+  flip_rows(im);
+  // Labels on the upright picture (text drawn before the flip would read upside down): the
+  // region's number and, where the settings name it and the name fits inside the region on its
+  // label's row, the name, on a light box. Openings stay unlabelled (they are holes).
   for (std::size_t r = 0; r < g.regions.size(); ++r) {
-    const Vector2d p = aft::param_to_pixel(surface, g.regions[r].label_point);
+    if (g.regions[r].opening) continue;
+    const Vector2d grid_px = aft::param_to_pixel(surface, g.regions[r].label_point);
+    const std::string number = std::to_string(r);
+    const std::string& name = g.regions[r].name;
+    const bool named = !name.empty() && name != "region-" + number;
+    std::string text = named ? number + " " + upper_case(name) : number;
+    if (named && text_width(text) + 2 > region_run_width(locate, surface, grid_px, r, im.width))
+      text = number;
+    const Vector2d p = texture_to_grid_pixel(grid_px, im.height);
+    const int w = text_width(text) + 2, h = text_height() + 2;
     const int x = (static_cast<int>(p.x()) % im.width + im.width) % im.width;
-    draw_text(im, std::clamp(x - 4, 0, im.width - 12),
-              std::clamp(static_cast<int>(p.y()) - 3, 0, im.height - 8), std::to_string(r),
-              {0, 0, 0});
+    draw_label(im, std::clamp(x - w / 2, 0, std::max(0, im.width - w)),
+               std::clamp(static_cast<int>(p.y()) - h / 2, 0, std::max(0, im.height - h)), text,
+               {0, 0, 0}, {245, 245, 245});
   }
   return im;
 }
 
 Image8 draw_mesh_2d(const RangeGrid& grid, const ScanSurface& surface,
                     const aft::AnimationMesh& am) {
-  Image8 im = texture_of(grid);
+  Image8 im = texture_in_grid_rows(grid);
   auto px = [&](int v) { return aft::param_to_pixel(surface, am.params[v]); };
   for (const auto& t : am.mesh.triangles)
     for (int k = 0; k < 3; ++k) {
@@ -115,6 +156,7 @@ Image8 draw_mesh_2d(const RangeGrid& grid, const ScanSurface& surface,
     b.x() = a.x() + std::remainder(b.x() - a.x(), static_cast<double>(im.width));
     draw_segment(im, a, b, {255, 40, 40});
   }
+  flip_rows(im);
   return im;
 }
 
@@ -135,19 +177,23 @@ aft::DataBorderMode border_mode(const std::string& option, const aft::RegionSett
 }
 
 // No --lines: no user lines (the data border alone can make a region of a partial scan).
-aft::LineSet user_lines(const std::string& lines_path) {
+aft::LineSet user_lines(const std::string& lines_path, int n_h, aft::FileRows rows) {
   if (lines_path.empty()) return {};
-  return aft::read_lines(lines_path);
+  return aft::read_lines(lines_path, n_h, rows);
 }
 
 Loaded load(const std::string& grid_path, const std::string& lines_path,
-            const std::string& settings_path, const std::string& data_border) {
+            const std::string& settings_path, const std::string& data_border,
+            const std::string& line_rows) {
   Loaded l;
+  const aft::FileRows rows = aft::parse_file_rows(line_rows);
   l.grid = read_grid(grid_path);
   l.surface = std::make_unique<ScanSurface>(l.grid);
-  if (!settings_path.empty()) l.settings = aft::read_region_settings(settings_path);
+  if (!settings_path.empty())
+    l.settings = aft::read_region_settings(settings_path, l.grid.n_h(), rows);
   l.border_mode = border_mode(data_border, l.settings);
-  l.border = aft::with_data_border(user_lines(lines_path), *l.surface, l.border_mode);
+  l.border =
+      aft::with_data_border(user_lines(lines_path, l.grid.n_h(), rows), *l.surface, l.border_mode);
   l.lines = std::move(l.border.lines);
   aft::validate_lines(l.lines, *l.surface);
   l.graph = aft::analyze_regions(l.lines, *l.surface);
@@ -183,18 +229,33 @@ void write_q_histogram_png(const std::filesystem::path& path, const aft::Animati
 }
 
 int run_regions(const RegionsArgs& a) {
-  const Loaded l = load(a.grid, a.lines, a.settings, a.data_border);
-  std::cout << border_text(l) << l.graph.to_text();
+  const Loaded l = load(a.grid, a.lines, a.settings, a.data_border, a.line_rows);
+  say() << border_text(l) << l.graph.to_text();
   if (!a.png.empty()) {
     write_png(a.png, draw_regions(l.grid, *l.surface, l.graph, l.lines));
-    std::cout << "region layout: " << a.png << "\n";
+    say() << "region layout: " << a.png << "\n";
   }
+  nlohmann::json regions = nlohmann::json::array();
+  for (std::size_t r = 0; r < l.graph.regions.size(); ++r) {
+    const aft::Region& reg = l.graph.regions[r];
+    regions.push_back({{"region", r},
+                       {"name", reg.name},
+                       {"opening", reg.opening},
+                       {"area_rad_mm", reg.area},
+                       {"unit_mm", reg.unit_mm},
+                       {"mesher", reg.mesher}});
+  }
+  result() = {
+      {"regions", regions}, {"segments", l.graph.segments.size()}, {"data_border", border_json(l)}};
+  if (!a.png.empty()) result()["png"] = a.png;
   return 0;
 }
 
 int run_animesh(const AnimeshArgs& a) {
   Stopwatch total;
-  Loaded l = load(a.grid, a.lines, a.settings, a.data_border);
+  const std::filesystem::path out(a.out);
+  OutputFolder folder(out);  // before the work: a bad --out fails at once (removed on failure)
+  Loaded l = load(a.grid, a.lines, a.settings, a.data_border, a.line_rows);
   if (a.seed) l.settings.seed = *a.seed;
   if (a.strategy == "random") l.settings.strategy = aft::EdgeStrategy::Random;
   if (a.strategy == "shortest") l.settings.strategy = aft::EdgeStrategy::Shortest;
@@ -205,8 +266,6 @@ int run_animesh(const AnimeshArgs& a) {
   const double t_mesh = mesh_time.seconds();
   const aft::AnimationMeshQuality q = aft::evaluate_quality(am, *l.surface, 6, &l.graph);
   const MeshCheckReport check = check_mesh(am.mesh);
-  const std::filesystem::path out(a.out);
-  OutputFolder folder(out);
   // The outputs appear together or not at all: a write that fails half way (a full disk) must
   // not leave this run's mesh next to an earlier run's report.
   StagedFiles outputs;
@@ -301,15 +360,17 @@ int run_animesh(const AnimeshArgs& a) {
                 {"duplicate_faces", check.duplicate_faces},
                 {"self_intersections", check.self_intersections},
                 {"boundary_loops", check.topology.boundary_loops}};
-  write_file_atomically(outputs.stage(out / "animesh.json"), j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+  write_file_atomically(outputs.stage(out / "animesh.json"), json_text(j) + "\n");
   outputs.commit();
   folder.keep();
-  std::cout << border_text(l) << l.graph.to_text() << am.mesh.positions.size() << " vertices ("
-            << steiner << " Steiner points), " << am.mesh.triangles.size()
-            << " triangles, meshed in " << t_mesh << " s\n"
-            << q.to_text() << "outputs in " << out.string()
-            << "/: mesh.ply mesh.obj animesh.json regions.png mesh2d.png render.png "
-               "min_angle_histogram.png q_histogram.png\n";
+  say() << border_text(l) << l.graph.to_text() << am.mesh.positions.size() << " vertices ("
+        << steiner << " Steiner points), " << am.mesh.triangles.size() << " triangles, meshed in "
+        << t_mesh << " s\n"
+        << q.to_text() << "outputs in " << out.string()
+        << "/: mesh.ply mesh.obj animesh.json regions.png mesh2d.png render.png "
+           "min_angle_histogram.png q_histogram.png\n";
+  result() = j;
+  result()["out"] = out.string();
   // The mesher's guarantees, checked on what was written: open fronts or a failed check are
   // reported in one line and by their own exit code (the outputs stay, animesh.json says where).
   std::vector<std::string> defects;
@@ -335,6 +396,16 @@ void add_data_border_option(CLI::App* command, std::string& value) {
       ->check(CLI::IsMember({"auto", "on", "off"}));
 }
 
+void add_line_rows_option(CLI::App* command, std::string& value) {
+  command
+      ->add_option("--line-rows", value,
+                   "How the y of --lines and the settings' points count: top (rows down from "
+                   "the top of the upright texture.png) | bottom (h rows up: files written "
+                   "before pictures were upright)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"top", "bottom"}));
+}
+
 }  // namespace
 
 void register_aft_commands(CLI::App& app, CommandList& commands) {
@@ -347,6 +418,7 @@ void register_aft_commands(CLI::App& app, CommandList& commands) {
       ->check(CLI::ExistingFile);
   r->add_option("--png", ra->png, "Draw the regions over the texture into this PNG");
   add_data_border_option(r, ra->data_border);
+  add_line_rows_option(r, ra->line_rows);
   commands.push_back({r, [ra] { return run_regions(*ra); }});
 
   auto aa = std::make_shared<AnimeshArgs>();
@@ -361,6 +433,7 @@ void register_aft_commands(CLI::App& app, CommandList& commands) {
   m->add_option("--strategy", aa->strategy, "Front edge order: random | shortest | longest")
       ->check(CLI::IsMember({"random", "shortest", "longest"}));
   add_data_border_option(m, aa->data_border);
+  add_line_rows_option(m, aa->line_rows);
   commands.push_back({m, [aa] { return run_animesh(*aa); }});
 }
 

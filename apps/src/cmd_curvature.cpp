@@ -111,7 +111,7 @@ int run_curvature(const CurvatureArgs& args) {
                                  {"files", files},
                                  {"timings", timings},
                                  {"versions", versions()}};
-  write_file_atomically(outputs.stage(dir / "curvature.json"), report.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+  write_file_atomically(outputs.stage(dir / "curvature.json"), json_text(report) + "\n");
 
   outputs.commit();
   folder.keep();
@@ -123,7 +123,9 @@ int run_curvature(const CurvatureArgs& args) {
     line << ", median max |k| " << std::setprecision(3)
          << report["percentiles"]["k_max"]["p50"].get<double>() << " 1/mm";
   line << "; wrote " << files.size() + 1 << " files to " << dir.string();
-  std::cout << line.str() << "\n";
+  say() << line.str() << "\n";
+  result() = report;
+  result()["out"] = dir.string();
   return 0;
 }
 

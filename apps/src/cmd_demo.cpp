@@ -181,18 +181,19 @@ int run_demo(const DemoArgs& args) {
       {"files",
        {"scan_raw.smg", "scan.smg", "scan.pcd", "mesh.ply", "mesh.obj", "mesh.mtl", "texture.png",
         "depth.png", "render.png", "fields.smf", "curvature.png", "report.json"}}};
-  write_file_atomically(out / "report.json", report.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+  write_file_atomically(out / "report.json", json_text(report) + "\n");
 
-  std::cout << "scanmesh demo: " << scene.name << ", " << grid.n_phi() << " x " << grid.n_h()
-            << " grid, " << grid.valid_count() << " valid cells after cleaning\n"
-            << "  mesh: " << meshed.mesh.vertex_count() << " vertices, " << meshed.mesh.face_count()
-            << " triangles\n"
-            << "  rms error vs ground truth (outside hair): "
-            << report["accuracy_vs_ground_truth"]["outside_hair"]["rms_error_mm"].get<double>()
-            << " mm\n"
-            << "  outputs in " << out.string()
-            << "/: mesh.ply mesh.obj mesh.mtl texture.png depth.png"
-            << " render.png curvature.png fields.smf scan.smg scan_raw.smg scan.pcd report.json\n";
+  say() << "scanmesh demo: " << scene.name << ", " << grid.n_phi() << " x " << grid.n_h()
+        << " grid, " << grid.valid_count() << " valid cells after cleaning\n"
+        << "  mesh: " << meshed.mesh.vertex_count() << " vertices, " << meshed.mesh.face_count()
+        << " triangles\n"
+        << "  rms error vs ground truth (outside hair): "
+        << report["accuracy_vs_ground_truth"]["outside_hair"]["rms_error_mm"].get<double>()
+        << " mm\n"
+        << "  outputs in " << out.string() << "/: mesh.ply mesh.obj mesh.mtl texture.png depth.png"
+        << " render.png curvature.png fields.smf scan.smg scan_raw.smg scan.pcd report.json\n";
+  result() = report;
+  result()["out"] = out.string();
   folder.keep();
   return 0;
 }

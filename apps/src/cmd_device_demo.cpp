@@ -101,13 +101,13 @@ int run_device_demo(const DemoArgs& args) {
   // 1. Scan: a fresh session folder inside the output folder (the demo owns it).
   const fs::path session_dir = out / "session";
   if (fs::exists(session_dir / "session.json")) {
-    std::cout << "[1/5] removing the previous demo session in " << session_dir.string() << "\n";
+    say() << "[1/5] removing the previous demo session in " << session_dir.string() << "\n";
     std::error_code ec;
     fs::remove_all(session_dir, ec);
     if (ec) throw IoError("cannot remove '" + session_dir.string() + "': " + ec.message());
   }
-  std::cout << "[1/5] scan: " << d.steps << " steps, " << d.size
-            << " frames, simulated board on a pty + simulated turntable camera\n";
+  say() << "[1/5] scan: " << d.steps << " steps, " << d.size
+        << " frames, simulated board on a pty + simulated turntable camera\n";
   SimScanRequest scan;
   scan.scene = args.scene.empty() ? "head" : args.scene;
   scan.out = session_dir.string();
@@ -120,14 +120,14 @@ int run_device_demo(const DemoArgs& args) {
   // 2. Calibrate the same (scaled) rig from its own chessboard views.
   t = {};
   const fs::path calib = out / "calibration.yaml";
-  std::cout << "[2/5] calibrate: simulated chessboard views at " << d.size << "\n";
+  say() << "[2/5] calibrate: simulated chessboard views at " << d.size << "\n";
   if (const int rc = run_sim_calibrate(d.size, calib.string()); rc != kSuccess) return rc;
   timings["calibrate_s"] = t.seconds();
   const Calibration cal = Calibration::read_yaml(calib);
 
   // 3. Reconstruct the recorded session with that calibration (cleaned, as `reconstruct` does).
   t = {};
-  std::cout << "[3/5] reconstruct: " << session_dir.string() << " -> scan.smg\n";
+  say() << "[3/5] reconstruct: " << session_dir.string() << " -> scan.smg\n";
   ReconstructArgs rec;
   rec.calib = calib.string();
   rec.out = (out / "scan.smg").string();
@@ -142,7 +142,7 @@ int run_device_demo(const DemoArgs& args) {
 
   // 4. The direct range simulator of the same scene on the same grid: the reference.
   t = {};
-  std::cout << "[4/5] direct range simulator of the same scene on the same grid\n";
+  say() << "[4/5] direct range simulator of the same scene on the same grid\n";
   const sim::Scene scene = load_scene(args.scene);
   sim::ScannerConfig ref;
   ref.n_phi = d.n_phi;
@@ -162,7 +162,7 @@ int run_device_demo(const DemoArgs& args) {
   timings["direct_simulation_s"] = t.seconds();
 
   // 5. The demo's downstream: mesh, pictures, curvature.
-  std::cout << "[5/5] mesh, pictures, curvature\n";
+  say() << "[5/5] mesh, pictures, curvature\n";
   const GridProducts products = write_grid_products(out, grid, args.meshing, timings);
   timings["total_s"] = total.seconds();
 
@@ -193,19 +193,21 @@ int run_device_demo(const DemoArgs& args) {
        {"session/", "calibration.yaml", "scan.smg", "direct.smg", "scan.pcd", "mesh.ply",
         "mesh.obj", "mesh.mtl", "texture.png", "depth.png", "render.png", "fields.smf",
         "curvature.png", "report.json"}}};
-  write_file_atomically(out / "report.json", report.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+  write_file_atomically(out / "report.json", json_text(report) + "\n");
 
-  std::cout << "scanmesh demo --device-sim: " << scene.name << ", " << grid.n_phi() << " x "
-            << grid.n_h() << " grid, " << grid.valid_count() << " valid cells\n"
-            << "  mesh: " << products.meshed.mesh.vertex_count() << " vertices, "
-            << products.meshed.mesh.face_count() << " triangles\n"
-            << "  vs direct range simulator: RMS " << comparison["rms_difference_mm"].get<double>()
-            << " mm over " << comparison["cells_valid_in_both"].get<std::size_t>()
-            << " cells valid in both\n"
-            << "  outputs in " << out.string()
-            << "/: session/ calibration.yaml scan.smg direct.smg mesh.ply mesh.obj texture.png "
-               "depth.png render.png curvature.png report.json ("
-            << timings["total_s"].get<double>() << " s)\n";
+  say() << "scanmesh demo --device-sim: " << scene.name << ", " << grid.n_phi() << " x "
+        << grid.n_h() << " grid, " << grid.valid_count() << " valid cells\n"
+        << "  mesh: " << products.meshed.mesh.vertex_count() << " vertices, "
+        << products.meshed.mesh.face_count() << " triangles\n"
+        << "  vs direct range simulator: RMS " << comparison["rms_difference_mm"].get<double>()
+        << " mm over " << comparison["cells_valid_in_both"].get<std::size_t>()
+        << " cells valid in both\n"
+        << "  outputs in " << out.string()
+        << "/: session/ calibration.yaml scan.smg direct.smg mesh.ply mesh.obj texture.png "
+           "depth.png render.png curvature.png report.json ("
+        << timings["total_s"].get<double>() << " s)\n";
+  result() = report;
+  result()["out"] = out.string();
   folder.keep();
   return kSuccess;
 }

@@ -28,10 +28,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct DevicesArgs {
-  bool json = false;
-};
-
 struct ScanArgs {
   std::string device, board, scene, out;
   bool sim = false, resume = false;
@@ -72,13 +68,13 @@ std::vector<std::string> tty_nodes() {
   return nodes;
 }
 
-int run_devices(const DevicesArgs& args) {
+int run_devices() {
   const auto cameras = drivers::list_cameras();
   const auto boards = drivers::list_usb_boards();
   const auto ttys = tty_nodes();
   char id[16];
-  if (args.json) {
-    nlohmann::json j;
+  {
+    nlohmann::json& j = result();
     j["cameras"] = nlohmann::json::array();
     for (const auto& c : cameras)
       j["cameras"].push_back({{"path", c.path},
@@ -93,26 +89,24 @@ int run_devices(const DevicesArgs& args) {
           {{"bus", b.bus}, {"address", b.address}, {"id", id}, {"kind", b.kind}});
     }
     j["tty"] = ttys;
-    std::cout << j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
-    return kSuccess;
   }
-  std::cout << "cameras:\n";
-  if (cameras.empty()) std::cout << "  (none)\n";
+  say() << "cameras:\n";
+  if (cameras.empty()) say() << "  (none)\n";
   for (const auto& c : cameras) {
     std::string formats;
     for (const auto& f : c.all_formats) formats += (formats.empty() ? "" : " ") + f;
-    std::cout << "  " << c.path << "  '" << c.card << "'  bus " << c.bus_info << "  formats "
-              << formats << "\n";
+    say() << "  " << c.path << "  '" << c.card << "'  bus " << c.bus_info << "  formats " << formats
+          << "\n";
   }
-  std::cout << "boards (USB):\n";
-  if (boards.empty()) std::cout << "  (none)\n";
+  say() << "boards (USB):\n";
+  if (boards.empty()) say() << "  (none)\n";
   for (const auto& b : boards) {
     std::snprintf(id, sizeof id, "%04x:%04x", b.vendor_id, b.product_id);
-    std::cout << "  usb:" << b.bus << ":" << b.address << "  " << id << "  " << b.kind << "\n";
+    say() << "  usb:" << b.bus << ":" << b.address << "  " << id << "  " << b.kind << "\n";
   }
-  std::cout << "boards (tty):\n";
-  if (ttys.empty()) std::cout << "  (none)\n";
-  for (const auto& t : ttys) std::cout << "  " << t << "\n";
+  say() << "boards (tty):\n";
+  if (ttys.empty()) say() << "  (none)\n";
+  for (const auto& t : ttys) say() << "  " << t << "\n";
   return kSuccess;
 }
 
@@ -193,8 +187,9 @@ int run_scan(const ScanArgs& a) {
     if (const auto damage = SessionReader(out).first_damaged_step()) {
       std::size_t from = damage->step;
       if (h.calibration) from = h.calibration->first_step(h.calibration->step(from).first);
-      std::cout << "scan: step " << damage->step << " is damaged (" << damage->reason
-                << "); capturing again from step " << from << "\n";
+      say() << "scan: step " << damage->step << " is damaged (" << damage->reason
+            << "); capturing again from step " << from << "\n";
+      result()["recaptured_from_step"] = from;
       session->rewind(from);
     }
     if (h.calibration && !session->complete()) {
@@ -202,8 +197,10 @@ int run_scan(const ScanArgs& a) {
       session->rewind(h.calibration->first_step(h.calibration->step(session->steps_done()).first));
     }
     if (session->complete()) {
-      std::cout << "scan: " << out.string() << " is already complete (" << h.step_count
-                << " steps)\n";
+      say() << "scan: " << out.string() << " is already complete (" << h.step_count << " steps)\n";
+      result()["session"] = out.string();
+      result()["steps_done"] = h.step_count;
+      result()["already_complete"] = true;
       return kSuccess;
     }
     if (session->steps_done() > 0) table_angle = h.step_angle(session->steps_done() - 1);
@@ -296,11 +293,17 @@ int run_scan(const ScanArgs& a) {
   };
   const CaptureReport report = capture_steps(*session, board, *camera, options);
   progress.finish();
-  std::cout << "scan: " << report.steps_done << " steps (" << report.steps_done - report.first_step
-            << " captured now";
-  if (report.first_step > 0) std::cout << ", resumed at step " << report.first_step;
-  std::cout << ") in " << report.seconds << " s, " << report.dropped_frames << " frames dropped -> "
-            << out.string() << "\n";
+  say() << "scan: " << report.steps_done << " steps (" << report.steps_done - report.first_step
+        << " captured now";
+  if (report.first_step > 0) say() << ", resumed at step " << report.first_step;
+  say() << ") in " << report.seconds << " s, " << report.dropped_frames << " frames dropped -> "
+        << out.string() << "\n";
+  result()["session"] = out.string();
+  result()["steps_done"] = report.steps_done;
+  result()["captured_now"] = report.steps_done - report.first_step;
+  result()["first_step"] = report.first_step;
+  result()["seconds"] = report.seconds;
+  result()["dropped_frames"] = report.dropped_frames;
   return kSuccess;
 }
 
@@ -370,9 +373,11 @@ int run_replay(const ReplayArgs& a) {
                            {"camera", header.camera.card},
                            {"board_firmware", header.board_firmware},
                            {"steps", steps}};
-  write_file_atomically(out / "replay.json", report.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
-  std::cout << "replay: " << n << " of " << header.step_count << " steps, "
-            << n * (header.laser_count + 1) << " frames verified -> " << out.string() << "\n";
+  write_file_atomically(out / "replay.json", json_text(report) + "\n");
+  say() << "replay: " << n << " of " << header.step_count << " steps, "
+        << n * (header.laser_count + 1) << " frames verified -> " << out.string() << "\n";
+  result() = report;
+  result()["out"] = out.string();
   folder.keep();
   return kSuccess;
 }
@@ -380,10 +385,8 @@ int run_replay(const ReplayArgs& a) {
 }  // namespace
 
 void register_devices_commands(CLI::App& app, CommandList& commands) {
-  auto dargs = std::make_shared<DevicesArgs>();
   CLI::App* devices = app.add_subcommand("devices", "List cameras and scanner boards");
-  devices->add_flag("--json", dargs->json, "Machine-readable output");
-  commands.push_back({devices, [dargs] { return run_devices(*dargs); }});
+  commands.push_back({devices, [] { return run_devices(); }});
 
   auto s = std::make_shared<ScanArgs>();
   CLI::App* scan = app.add_subcommand("scan", "Capture a turntable scan into a session folder");

@@ -4,6 +4,7 @@
 #include <iomanip>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "cli_support.h"
 #include "commands.h"
@@ -20,47 +21,75 @@ namespace scanmesh::cli {
 
 namespace {
 
+// The checker's report with one verdict per property (null where it was not tested): the
+// "check" block of the fans report and what `check --json` prints.
+nlohmann::json check_json(const MeshCheckReport& check) {
+  nlohmann::json verdicts, evidence;
+  for (const PropertyVerdict& v : mesh_verdicts(check)) {
+    verdicts[property_name(v.property)] = v.known ? nlohmann::json(v.holds) : nlohmann::json();
+    evidence[property_name(v.property)] = v.evidence;
+  }
+  const TopologyStats& t = check.topology;
+  return {{"vertices", check.vertices},
+          {"faces", check.faces},
+          {"edges", t.edges},
+          {"nonmanifold_vertices", check.nonmanifold_vertices},
+          {"nonmanifold_edges", t.nonmanifold_edges},
+          {"inconsistently_oriented_edges", t.inconsistent_edges},
+          {"duplicate_faces", check.duplicate_faces},
+          {"degenerate_faces", check.degenerate_faces},
+          {"self_intersections", check.self_intersections_checked
+                                     ? nlohmann::json(check.self_intersections)
+                                     : nlohmann::json()},
+          {"boundary_loops", t.boundary_loops},
+          {"boundary_loop_lengths", t.boundary_loop_lengths},
+          {"unreferenced_vertices", t.unreferenced_vertices},
+          {"components", t.components},
+          {"euler_characteristic", t.euler_characteristic},
+          {"genus", t.genus()},
+          {"min_angle_deg", check.min_angle_deg},
+          {"mean_min_angle_deg", check.mean_min_angle_deg},
+          {"min_quality", check.min_quality},
+          {"mean_quality", check.mean_quality},
+          {"fraction_min_angle_ge_30", check.fraction_min_angle_ge_30},
+          {"min_angle_histogram_5deg", check.min_angle_histogram},
+          {"verdicts", verdicts},
+          {"evidence", evidence}};
+}
+
 // What was meshed, how the stages went and the checker's verdicts (docs/formats.md).
 nlohmann::json fans_report_json(const std::string& input, const PointCloud& cloud,
-                                const FanResult& r, const MeshCheckReport& check) {
+                                const FanResult& r, const MeshCheckReport* check) {
   const FanStats& s = r.stats;
-  nlohmann::json verdicts;
-  for (const PropertyVerdict& v : mesh_verdicts(check))
-    verdicts[property_name(v.property)] = v.known ? nlohmann::json(v.holds) : nlohmann::json();
-  return {
+  nlohmann::json j = {
       {"input", input},
       {"points", s.points},
       {"input_colours", cloud.has_colors()},
       {"input_normals", cloud.has_normals()},
       {"triangles", r.mesh.face_count()},
       {"duplicate_points", s.duplicate_points},
-      {"seconds", {{"normals", s.seconds_normals},
-                   {"fans", s.seconds_fans},
-                   {"assembly", s.seconds_assembly}}},
-      {"fans", {{"cell_edge", s.cell_edge},
-                {"pca_fallbacks", s.pca_fallbacks},
-                {"open_fans", s.open_fans},
-                {"candidates", s.proposed_triangles},
-                {"unused_candidates", s.rejected_triangles}}},
-      {"surface_growth", {{"seeds", s.seeds},
-                          {"glued_triangles", s.glued_triangles},
-                          {"glues_taken_back", s.unzipped_glues},
-                          {"hole_triangles", s.hole_triangles},
-                          {"inserted_points", s.inserted_points},
-                          {"delaunay_flips", s.delaunay_flips},
-                          {"bowtie_faces_removed", s.bowtie_faces_removed},
-                          {"unused_points", s.unused_points}}},
-      {"check", {{"nonmanifold_vertices", check.nonmanifold_vertices},
-                 {"nonmanifold_edges", check.topology.nonmanifold_edges},
-                 {"self_intersections", check.self_intersections},
-                 {"boundary_loops", check.topology.boundary_loops},
-                 {"components", check.topology.components},
-                 {"euler_characteristic", check.topology.euler_characteristic},
-                 {"genus", check.topology.genus()},
-                 {"min_angle_deg", check.min_angle_deg},
-                 {"fraction_min_angle_ge_30", check.fraction_min_angle_ge_30},
-                 {"verdicts", verdicts}}},
+      {"seconds",
+       {{"normals", s.seconds_normals},
+        {"fans", s.seconds_fans},
+        {"assembly", s.seconds_assembly}}},
+      {"fans",
+       {{"cell_edge", s.cell_edge},
+        {"pca_fallbacks", s.pca_fallbacks},
+        {"open_fans", s.open_fans},
+        {"candidates", s.proposed_triangles},
+        {"unused_candidates", s.rejected_triangles}}},
+      {"surface_growth",
+       {{"seeds", s.seeds},
+        {"glued_triangles", s.glued_triangles},
+        {"glues_taken_back", s.unzipped_glues},
+        {"hole_triangles", s.hole_triangles},
+        {"inserted_points", s.inserted_points},
+        {"delaunay_flips", s.delaunay_flips},
+        {"bowtie_faces_removed", s.bowtie_faces_removed},
+        {"unused_points", s.unused_points}}},
   };
+  if (check) j["check"] = check_json(*check);
+  return j;
 }
 
 }  // namespace
@@ -75,12 +104,13 @@ int run_fans(const FansArgs& args) {
   try {
     result = build_fans(cloud, options);
   } catch (const InvalidInputError& e) {
-    // The cloud itself cannot be meshed (too few points, all coincident): name the file.
-    throw InvalidInputError(args.cloud + ": " + e.what() + " (the fan mesher needs at least 3 "
-                            "distinct points spread over a surface)");
+    // The cloud itself cannot be meshed (too few points, all coincident, a crowded cluster):
+    // name the file.
+    throw InvalidInputError(args.cloud + ": " + e.what());
   }
   const FanStats& s = result.stats;
-  const bool need_check = !args.histogram_png.empty() || args.check || !args.report.empty();
+  const bool need_check = !args.histogram_png.empty() || args.check || !args.report.empty() ||
+                          output_mode() == OutputMode::Json;
   const MeshCheckReport report = need_check ? check_mesh(result.mesh) : MeshCheckReport{};
   // The mesh, its pictures and its report appear together or not at all.
   StagedFiles outputs;
@@ -89,26 +119,29 @@ int run_fans(const FansArgs& args) {
     write_png(outputs.stage(args.render_png), render_views(result.mesh));
   if (!args.histogram_png.empty())
     write_quality_histogram_png(outputs.stage(args.histogram_png), report);
+  const nlohmann::json summary =
+      fans_report_json(args.cloud, cloud, result, need_check ? &report : nullptr);
   if (!args.report.empty())
-    write_file_atomically(outputs.stage(args.report),
-                          fans_report_json(args.cloud, cloud, result, report).dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+    write_file_atomically(outputs.stage(args.report), json_text(summary) + "\n");
   outputs.commit();
-  std::cout << std::fixed << std::setprecision(3) << "fans: " << s.points << " points -> "
-            << result.mesh.face_count() << " triangles in "
-            << s.seconds_normals + s.seconds_fans + s.seconds_assembly << " s (normals "
-            << s.seconds_normals << ", fans " << s.seconds_fans << ", assembly "
-            << s.seconds_assembly << ")\n"
-            << "  cell edge " << s.cell_edge << ", PCA fallbacks " << s.pca_fallbacks
-            << ", open fans " << s.open_fans << ", unused candidates " << s.rejected_triangles
-            << ", hole triangles " << s.hole_triangles << ", inserted points " << s.inserted_points
-            << ", unused points " << s.unused_points << "\n"
-            << "  surface growth: " << s.seeds << " seeds, " << s.glued_triangles
-            << " glued triangles, " << s.unzipped_glues << " glues taken back, "
-            << s.delaunay_flips << " Delaunay flips, " << s.bowtie_faces_removed
-            << " faces off bow-ties\n";
-  std::cout.unsetf(std::ios::floatfield);
-  if (args.check) std::cout << report.to_text();
-  std::cout << "wrote " << args.out << "\n";
+  std::ostringstream text;
+  text << std::fixed << std::setprecision(3) << "fans: " << s.points << " points -> "
+       << result.mesh.face_count() << " triangles in "
+       << s.seconds_normals + s.seconds_fans + s.seconds_assembly << " s (normals "
+       << s.seconds_normals << ", fans " << s.seconds_fans << ", assembly " << s.seconds_assembly
+       << ")\n"
+       << "  cell edge " << s.cell_edge << ", PCA fallbacks " << s.pca_fallbacks << ", open fans "
+       << s.open_fans << ", unused candidates " << s.rejected_triangles << ", hole triangles "
+       << s.hole_triangles << ", inserted points " << s.inserted_points << ", unused points "
+       << s.unused_points << "\n"
+       << "  surface growth: " << s.seeds << " seeds, " << s.glued_triangles << " glued triangles, "
+       << s.unzipped_glues << " glues taken back, " << s.delaunay_flips << " Delaunay flips, "
+       << s.bowtie_faces_removed << " faces off bow-ties\n";
+  say() << text.str();
+  if (args.check) say() << report.to_text();
+  say() << "wrote " << args.out << "\n";
+  cli::result() = summary;  // (`result` here is the fans' result)
+  cli::result()["out"] = args.out;
   return kSuccess;
 }
 
@@ -123,7 +156,9 @@ int run_check(const CheckArgs& args) {
                             "which --no-intersections skips");
   const Mesh mesh = read_mesh(args.mesh);
   const MeshCheckReport report = check_mesh(mesh, {.self_intersections = !args.skip_intersections});
-  std::cout << args.mesh << "\n" << report.to_text();
+  say() << args.mesh << "\n" << report.to_text();
+  result() = check_json(report);
+  result()["mesh"] = args.mesh;
   if (!args.histogram_png.empty()) write_quality_histogram_png(args.histogram_png, report);
   if (required.empty()) return report.edge_manifold() ? kSuccess : kNotEdgeManifold;
   // Only the required properties decide the exit code; each failing one is named on stderr.

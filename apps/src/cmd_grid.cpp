@@ -1,8 +1,9 @@
 // Subcommands that produce or inspect range grids: sim, info, export, clean.
 #include <algorithm>
 #include <cctype>
-#include <iostream>
+#include <utility>
 
+#include "cli_support.h"
 #include "commands.h"
 #include "pipeline.h"
 #include "scanmesh/acquisition/scan_cleaning.h"
@@ -21,15 +22,16 @@ int run_sim(const SimArgs& args) {
   config.validate();
   const auto scan = simulate_with_progress(scene, config);
   write_grid(args.out, scan.grid);
-  std::cout << "wrote " << args.out << ": " << scan.grid.n_phi() << " x " << scan.grid.n_h()
-            << " cells, " << scan.grid.valid_count() << " valid\n";
+  say() << "wrote " << args.out << ": " << scan.grid.n_phi() << " x " << scan.grid.n_h()
+        << " cells, " << scan.grid.valid_count() << " valid\n";
+  result() = {{"out", args.out}, {"grid", grid_summary(scan.grid)}};
   return 0;
 }
 
 namespace {
 
 nlohmann::json describe(const std::filesystem::path& file) {
-  if (looks_like_grid_file(file)) {
+  if (looks_like_grid_file(file) || file.extension() == ".smg") {
     nlohmann::json j = grid_summary(read_grid(file));
     j["kind"] = "range grid";
     return j;
@@ -51,11 +53,11 @@ nlohmann::json describe(const std::filesystem::path& file) {
 void print_text(const nlohmann::json& j, const std::string& indent = "") {
   for (const auto& [key, value] : j.items()) {
     if (value.is_object()) {
-      std::cout << indent << key << ":\n";
+      say() << indent << key << ":\n";
       print_text(value, indent + "  ");
     } else {
-      std::cout << indent << key << ": "
-                << (value.is_string() ? value.get<std::string>() : value.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace)) << "\n";
+      say() << indent << key << ": "
+            << (value.is_string() ? value.get<std::string>() : json_text(value, -1)) << "\n";
     }
   }
 }
@@ -63,11 +65,8 @@ void print_text(const nlohmann::json& j, const std::string& indent = "") {
 }  // namespace
 
 int run_info(const InfoArgs& args) {
-  const nlohmann::json j = describe(args.file);
-  if (args.json)
-    std::cout << j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << "\n";
-  else
-    print_text(j);
+  result() = describe(args.file);
+  print_text(result());  // the same fields as text (--json prints the object itself)
   return 0;
 }
 
@@ -79,7 +78,13 @@ int run_export(const ExportArgs& args) {
   if (!args.ply.empty()) export_ply_points(args.ply, grid);
   if (!args.texture.empty()) export_texture_png(args.texture, grid);
   if (!args.depth.empty()) export_depth_png(args.depth, grid);
-  std::cout << "exported " << args.grid << " (" << grid.valid_count() << " valid cells)\n";
+  say() << "exported " << args.grid << " (" << grid.valid_count() << " valid cells)\n";
+  result() = {{"grid", args.grid}, {"valid_cells", grid.valid_count()}};
+  for (const auto& [key, path] : {std::pair<const char*, const std::string&>{"pcd", args.pcd},
+                                  {"ply", args.ply},
+                                  {"texture", args.texture},
+                                  {"depth", args.depth}})
+    if (!path.empty()) result()["outputs"][key] = path;
   return 0;
 }
 
@@ -96,12 +101,18 @@ int run_clean(const CleanArgs& args) {
     grid.metadata["filled_cells"] = std::to_string(filled.cells);
   }
   write_grid(args.out, grid);
-  std::cout << "removed " << report.spikes_removed << " spikes and "
-            << report.fragment_cells_removed << " cells in " << report.fragments_removed
-            << " fragments";
+  say() << "removed " << report.spikes_removed << " spikes and " << report.fragment_cells_removed
+        << " cells in " << report.fragments_removed << " fragments";
   if (args.fill_holes > 0)
-    std::cout << "; filled " << filled.holes << " holes (" << filled.cells << " cells)";
-  std::cout << "; " << grid.valid_count() << " valid cells remain\n";
+    say() << "; filled " << filled.holes << " holes (" << filled.cells << " cells)";
+  say() << "; " << grid.valid_count() << " valid cells remain\n";
+  result() = {{"out", args.out},
+              {"spikes_removed", report.spikes_removed},
+              {"fragment_cells_removed", report.fragment_cells_removed},
+              {"fragments_removed", report.fragments_removed},
+              {"holes_filled", filled.holes},
+              {"cells_filled", filled.cells},
+              {"valid_cells", grid.valid_count()}};
   return 0;
 }
 

@@ -98,24 +98,26 @@ nlohmann::json report_json(const ImportResult& r, const std::string& input) {
 
 void print_summary(const ImportResult& r, const ImportArgs& a) {
   const ImportReport& rep = r.report;
-  std::cout << std::setprecision(4) << "import: " << a.input << ": " << rep.input_kind << ", "
-            << rep.input_points << " points";
-  if (rep.input_triangles) std::cout << ", " << rep.input_triangles << " triangles";
-  std::cout << (rep.colors ? ", colours" : "") << "\n  " << rep.method << " into "
-            << r.grid.n_phi() << " x " << r.grid.n_h() << " cells (dh " << r.grid.dh()
-            << " mm), " << r.grid.valid_count() << " valid\n  axis through ("
-            << rep.axis.point.transpose() << ") along (" << rep.axis.direction.transpose()
-            << ")\n  turn covered: " << 100.0 * rep.coverage.covered_fraction() << " %";
+  std::ostringstream text;
+  text << std::setprecision(4) << "import: " << a.input << ": " << rep.input_kind << ", "
+       << rep.input_points << " points";
+  if (rep.input_triangles) text << ", " << rep.input_triangles << " triangles";
+  text << (rep.colors ? ", colours" : "") << "\n  " << rep.method << " into " << r.grid.n_phi()
+       << " x " << r.grid.n_h() << " cells (dh " << r.grid.dh() << " mm), " << r.grid.valid_count()
+       << " valid\n  axis through (" << rep.axis.point.transpose() << ") along ("
+       << rep.axis.direction.transpose()
+       << ")\n  turn covered: " << 100.0 * rep.coverage.covered_fraction() << " %";
   if (!rep.coverage.full_turn && !rep.coverage.arcs.empty()) {
-    std::cout << " (" << rep.coverage.arcs.size() << " arc(s), longest "
-              << degrees(rep.coverage.arcs[0].first) << " to "
-              << degrees(rep.coverage.arcs[0].second) << " deg)";
+    text << " (" << rep.coverage.arcs.size() << " arc(s), longest "
+         << degrees(rep.coverage.arcs[0].first) << " to " << degrees(rep.coverage.arcs[0].second)
+         << " deg)";
     if (a.axis_point.empty())
-      std::cout << "\n  note: a partial turn about the data's centroid; give the turntable's "
-                   "axis with --axis-point if the file has one (Horus: 0,0,0)";
+      text << "\n  note: a partial turn about the data's centroid; give the turntable's "
+              "axis with --axis-point if the file has one (Horus: 0,0,0)";
   }
-  std::cout << "\n";
-  for (const auto& w : rep.warnings) std::cout << "  warning: " << w << "\n";
+  text << "\n";
+  for (const auto& w : rep.warnings) text << "  warning: " << w << "\n";
+  say() << text.str();
 }
 
 int run_import(const ImportArgs& a) {
@@ -124,12 +126,14 @@ int run_import(const ImportArgs& a) {
   StagedFiles outputs;
   write_grid(outputs.stage(a.out), r.grid);
   if (!a.report.empty())
-    write_file_atomically(outputs.stage(a.report), report_json(r, a.input).dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+    write_file_atomically(outputs.stage(a.report), json_text(report_json(r, a.input)) + "\n");
   if (!a.texture_png.empty()) export_texture_png(outputs.stage(a.texture_png), r.grid);
   if (!a.depth_png.empty()) export_depth_png(outputs.stage(a.depth_png), r.grid);
   outputs.commit();
   print_summary(r, a);
-  std::cout << "wrote " << a.out << "\n";
+  say() << "wrote " << a.out << "\n";
+  result() = report_json(r, a.input);
+  result()["out"] = a.out;
   return kSuccess;
 }
 

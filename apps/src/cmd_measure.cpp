@@ -69,8 +69,8 @@ std::vector<Eigen::Vector3d> object_points(const ScanStepSource& source, const C
   std::vector<Eigen::Vector3d> out;
   for (const auto& p : pts)
     if (p.p.z() > min_height) out.push_back(p.p);
-  std::printf("%s: %zu steps, %zu peaks, %zu points above the platter\n", label.c_str(), st.steps,
-              st.peaks, out.size());
+  sayf("%s: %zu steps, %zu peaks, %zu points above the platter\n", label.c_str(), st.steps,
+       st.peaks, out.size());
   if (out.size() < 100)
     throw InvalidInputError("check-calibration: only " + std::to_string(out.size()) +
                             " points of the " + label + " (is it in view?)");
@@ -102,7 +102,7 @@ struct Verdict {
 
 void report_sphere(const char* name, const SphereFit& f, double nominal, const MeasureArgs& a,
                    Verdict& v) {
-  std::printf(
+  sayf(
       "  %s: radius %.4f mm (nominal %.3f, error %+.4f), RMS %.4f mm, max %.4f mm, "
       "%zu points\n",
       name, f.radius, nominal, f.radius - nominal, f.rms, f.max_abs, f.points);
@@ -124,8 +124,8 @@ nlohmann::json measure_dumbbell(const std::vector<Eigen::Vector3d>& pts, const M
   report_sphere("dumbbell ball 1", fa, a.ball_radius_mm, a, v);
   report_sphere("dumbbell ball 2", fb, a.ball_radius_mm, a, v);
   const double spacing = (fa.centre - fb.centre).norm();
-  std::printf("  dumbbell: spacing %.4f mm (nominal %.3f, error %+.4f)\n", spacing,
-              a.ball_spacing_mm, spacing - a.ball_spacing_mm);
+  sayf("  dumbbell: spacing %.4f mm (nominal %.3f, error %+.4f)\n", spacing, a.ball_spacing_mm,
+       spacing - a.ball_spacing_mm);
   v.check("dumbbell spacing error", spacing - a.ball_spacing_mm, a.max_spacing_error_mm);
   return {{"ball_1", sphere_json(fa, a.ball_radius_mm)},
           {"ball_2", sphere_json(fb, a.ball_radius_mm)},
@@ -184,16 +184,17 @@ int run_measure(const MeasureArgs& a) {
   }
   report["pass"] = verdict.pass;
   report["failures"] = verdict.failures;
-  if (!a.report.empty()) write_file_atomically(a.report, report.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
+  if (!a.report.empty()) write_file_atomically(a.report, json_text(report) + "\n");
+  result() = report;
   if (verdict.pass) {
-    std::printf(
+    sayf(
         "check-calibration: PASS (within +- %.3f mm radius, %.3f mm RMS, +- %.3f mm "
         "spacing)\n",
         a.max_radius_error_mm, a.max_rms_mm, a.max_spacing_error_mm);
     return kSuccess;
   }
-  std::printf("check-calibration: FAIL\n");
-  for (const auto& f : verdict.failures) std::printf("  %s\n", f.get<std::string>().c_str());
+  sayf("check-calibration: FAIL\n");
+  for (const auto& f : verdict.failures) sayf("  %s\n", f.get<std::string>().c_str());
   return kOutOfTolerance;
 }
 

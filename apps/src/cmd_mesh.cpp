@@ -1,8 +1,10 @@
 // Subcommands that produce or show meshes: grid-mesh, render.
+#include <cctype>
 #include <filesystem>
-#include <iostream>
+#include <utility>
 #include <vector>
 
+#include "cli_support.h"
 #include "commands.h"
 #include "pipeline.h"
 #include "scanmesh/core/atomic_file.h"
@@ -10,6 +12,7 @@
 #include "scanmesh/core/grid_export.h"
 #include "scanmesh/core/grid_file.h"
 #include "scanmesh/core/mesh_io.h"
+#include "scanmesh/core/point_cloud_io.h"
 
 namespace scanmesh::cli {
 
@@ -35,21 +38,53 @@ int run_grid_mesh(const GridMeshArgs& args) {
   if (!args.out_stl.empty()) write_stl(args.out_stl, result.mesh);
   if (!args.render_png.empty()) write_png(args.render_png, render_views(result.mesh));
   created.keep();
-  std::cout << "meshed " << result.quads_meshed << " quads: " << result.mesh.vertex_count()
-            << " vertices, " << result.mesh.face_count() << " triangles ("
-            << result.quads_skipped_for_holes << " quads skipped at holes, "
-            << result.quads_skipped_for_depth_jumps << " at depth jumps)\n";
+  say() << "meshed " << result.quads_meshed << " quads: " << result.mesh.vertex_count()
+        << " vertices, " << result.mesh.face_count() << " triangles ("
+        << result.quads_skipped_for_holes << " quads skipped at holes, "
+        << result.quads_skipped_for_depth_jumps << " at depth jumps)\n";
+  nlohmann::json& j = cli::result();
+  j = {{"quads_meshed", result.quads_meshed},
+       {"quads_skipped_for_holes", result.quads_skipped_for_holes},
+       {"quads_skipped_for_depth_jumps", result.quads_skipped_for_depth_jumps},
+       {"mesh", mesh_summary(result.mesh)}};
+  for (const auto& [key, path] : {std::pair<const char*, const std::string&>{"ply", args.out_ply},
+                                  {"obj", args.out_obj},
+                                  {"stl", args.out_stl},
+                                  {"render", args.render_png}})
+    if (!path.empty()) j["outputs"][key] = path;
   return 0;
 }
 
+namespace {
+
+// A mesh file, or a point cloud (.xyz .txt .pts .pcd) as a mesh without triangles, which the
+// renderer draws as points; a PLY without faces is a cloud already.
+Mesh read_mesh_or_cloud(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext != ".xyz" && ext != ".txt" && ext != ".pts" && ext != ".pcd") return read_mesh(path);
+  const PointCloud cloud = read_point_cloud(path).finite_points();
+  Mesh mesh;
+  mesh.positions = cloud.positions;
+  mesh.normals = cloud.normals;
+  mesh.colors = cloud.colors;
+  return mesh;
+}
+
+}  // namespace
+
 int run_render(const RenderArgs& args) {
-  const Mesh mesh = read_mesh(args.mesh);
+  const Mesh mesh = read_mesh_or_cloud(args.mesh);
   write_png(args.out, render_mesh(mesh, {.width = args.size,
                                          .height = args.size,
                                          .azimuth_deg = args.azimuth_deg,
                                          .elevation_deg = args.elevation_deg,
                                          .draw_wireframe = args.wireframe}));
-  std::cout << "wrote " << args.out << "\n";
+  say() << "wrote " << args.out << "\n";
+  result() = {{"out", args.out},
+              {"vertices", mesh.vertex_count()},
+              {"faces", mesh.face_count()},
+              {"drawn_as", mesh.triangles.empty() ? "points" : "triangles"}};
   return 0;
 }
 

@@ -61,10 +61,10 @@ remeshing::PrepareOptions choose_prepare(const Mesh& raw, const RemeshArgs& a) {
   const bool scan = looks_like_scan(ts);
   if (!a.no_prepare && (a.force_prepare || scan)) {
     po = scan_prepare_options(raw, a.vertices);
-    std::cout << "prepare: " << (scan ? "the input looks like a scan" : "asked for") << " ("
-              << ts.boundary_loops << " boundary loops, " << ts.components
-              << " components): scan clean-up at the output's edge length "
-              << po.tip_reach_mm << " mm (--no-prepare to skip)\n";
+    say() << "prepare: " << (scan ? "the input looks like a scan" : "asked for") << " ("
+          << ts.boundary_loops << " boundary loops, " << ts.components
+          << " components): scan clean-up at the output's edge length " << po.tip_reach_mm
+          << " mm (--no-prepare to skip)\n";
   }
   if (a.min_component) po.min_component_faces = *a.min_component;
   if (a.fill_holes) po.max_hole_edges = *a.fill_holes;
@@ -78,20 +78,22 @@ remeshing::PrepareOptions choose_prepare(const Mesh& raw, const RemeshArgs& a) {
 }
 
 void print_prepare_stats(const remeshing::PrepareOptions& po, const remeshing::PrepareStats& ps) {
+  if (ps.repeated_faces_removed > 0)
+    say() << "prepare: " << ps.repeated_faces_removed
+          << " faces removed that repeat an earlier face's corners\n";
   if (po.needle_angle_deg > 0)
-    std::cout << "prepare: " << ps.degenerate_removed << " degenerate faces removed, "
-              << ps.needles_welded << " needles welded, " << ps.caps_flipped << " caps flipped, "
-              << ps.caps_removed << " caps removed\n";
+    say() << "prepare: " << ps.degenerate_removed << " degenerate faces removed, "
+          << ps.needles_welded << " needles welded, " << ps.caps_flipped << " caps flipped, "
+          << ps.caps_removed << " caps removed\n";
   if (po.remove_spikes)
-    std::cout << "prepare: " << ps.spike_faces_removed << " spike faces and "
-              << ps.pinch_faces_removed << " faces at pinch vertices and " << ps.tip_faces_removed
-              << " at border tips sharper than " << po.tip_angle_deg << " deg over "
-              << po.tip_reach_mm << " mm removed\n";
+    say() << "prepare: " << ps.spike_faces_removed << " spike faces and " << ps.pinch_faces_removed
+          << " faces at pinch vertices and " << ps.tip_faces_removed
+          << " at border tips sharper than " << po.tip_angle_deg << " deg over " << po.tip_reach_mm
+          << " mm removed\n";
   if (po.min_component_faces > 0 || po.min_component_area > 0 || po.max_hole_edges > 0 ||
       po.max_hole_perimeter > 0)
-    std::cout << "prepare: removed " << ps.components_removed << " components (" << ps.faces_removed
-              << " faces), closed " << ps.holes_filled << " holes (" << ps.faces_added
-              << " faces)\n";
+    say() << "prepare: removed " << ps.components_removed << " components (" << ps.faces_removed
+          << " faces), closed " << ps.holes_filled << " holes (" << ps.faces_added << " faces)\n";
 }
 
 // The count is the one promise of the command: a miss over 1 % is an error, not a result.
@@ -129,13 +131,13 @@ int run_remesh(const RemeshArgs& a) {
   {
     const TopologyStats ts = topology_stats(input);
     input_loops = ts.boundary_loops;
-    std::cout << "input: " << input.triangles.size() << " triangles, " << ts.boundary_loops
-              << " boundary loops";
+    say() << "input: " << input.triangles.size() << " triangles, " << ts.boundary_loops
+          << " boundary loops";
     if (!ts.boundary_loop_lengths.empty())
-      std::cout << " (longest " << ts.boundary_loop_lengths.front() << " edges, shortest "
-                << ts.boundary_loop_lengths.back() << ")";
-    std::cout << ", " << ts.nonmanifold_edges << " non-manifold and " << ts.inconsistent_edges
-              << " inconsistently oriented edges\n";
+      say() << " (longest " << ts.boundary_loop_lengths.front() << " edges, shortest "
+            << ts.boundary_loop_lengths.back() << ")";
+    say() << ", " << ts.nonmanifold_edges << " non-manifold and " << ts.inconsistent_edges
+          << " inconsistently oriented edges\n";
   }
   RemeshOptions o;
   o.target_vertices = a.vertices;
@@ -173,67 +175,81 @@ int run_remesh(const RemeshArgs& a) {
   if (a.write_prepared) write_ply(outputs.stage(dir / "prepared.ply"), input);
   const RemeshQuality q = evaluate_remesh(input, r, !a.no_intersections);
   const RemeshStats& s = r.stats;
-  std::ostringstream json;
-  json << "{\n\"input\": "
-       << nlohmann::json(a.mesh).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace)
-       << ",\n\"target_vertices\": " << a.vertices
-       << ",\n\"scheme\": \"" << a.scheme << "\",\n\"gamma\": " << o.density.gamma
-       << ",\n\"n_filter\": " << a.filter << ",\n\"curvature_radius\": "
-       << o.density.curvature_radius << ",\n\"gradation\": " << o.density.gradation
-       << ",\n\"prepare\": {\"components_removed\": " << ps.components_removed
-       << ", \"holes_filled\": " << ps.holes_filled
-       << ", \"spike_faces_removed\": " << ps.spike_faces_removed
-       << ", \"pinch_faces_removed\": " << ps.pinch_faces_removed
-       << ", \"tip_faces_removed\": " << ps.tip_faces_removed
-       << ", \"needles_welded\": " << ps.needles_welded << "}"
-       << ",\n\"stats\": {\"input_vertices\": " << s.input_vertices
-       << ", \"input_faces\": " << s.input_faces << ", \"output_vertices\": " << s.output_vertices
-       << ", \"output_faces\": " << s.output_faces
-       << ", \"skeleton_segments\": " << s.skeleton_segments
-       << ", \"branch_vertices\": " << s.branch_vertices << ", \"patches\": " << s.patches
-       << ", \"collapses\": " << s.collapses << ", \"splits\": " << s.splits
-       << ", \"flips\": " << s.flips << ", \"moves\": " << s.moves
-       << ", \"rejected_error\": " << s.rejected_error
-       << ", \"rejected_topology\": " << s.rejected_topology
-       << ", \"skeleton_splits\": " << s.skeleton_splits
-       << ", \"skeleton_collapses\": " << s.skeleton_collapses
-       << ", \"intersecting_faces_before_repair\": " << s.intersecting_faces_before_repair
-       << ", \"repair_splits\": " << s.repair_splits
-       << ", \"polish_bad_before\": " << s.polish_bad_before
-       << ", \"polish_bad_after\": " << s.polish_bad_after
-       << ", \"polish_moves\": " << s.polish_moves << ", \"polish_flips\": " << s.polish_flips
-       << ", \"seconds_setup\": " << s.seconds_setup << ", \"seconds_adapt\": " << s.seconds_adapt
-       << ", \"seconds_count\": " << s.seconds_count
-       << ", \"seconds_regularize\": " << s.seconds_regularize
-       << ", \"seconds_smooth\": " << s.seconds_smooth << ", \"seconds_total\": " << s.seconds_total
-       << "},\n\"quality\": " << q.to_json() << "}\n";
-  write_file_atomically(outputs.stage(dir / "report.json"), json.str());
+  const nlohmann::json report = {
+      {"input", a.mesh},
+      {"target_vertices", a.vertices},
+      {"scheme", a.scheme},
+      {"gamma", o.density.gamma},
+      {"n_filter", a.filter},
+      {"curvature_radius", o.density.curvature_radius},
+      {"gradation", o.density.gradation},
+      {"prepare",
+       {{"components_removed", ps.components_removed},
+        {"holes_filled", ps.holes_filled},
+        {"spike_faces_removed", ps.spike_faces_removed},
+        {"pinch_faces_removed", ps.pinch_faces_removed},
+        {"tip_faces_removed", ps.tip_faces_removed},
+        {"needles_welded", ps.needles_welded},
+        {"repeated_faces_removed", ps.repeated_faces_removed}}},
+      {"stats",
+       {{"input_vertices", s.input_vertices},
+        {"input_faces", s.input_faces},
+        {"output_vertices", s.output_vertices},
+        {"output_faces", s.output_faces},
+        {"skeleton_segments", s.skeleton_segments},
+        {"branch_vertices", s.branch_vertices},
+        {"patches", s.patches},
+        {"collapses", s.collapses},
+        {"splits", s.splits},
+        {"flips", s.flips},
+        {"moves", s.moves},
+        {"rejected_error", s.rejected_error},
+        {"rejected_topology", s.rejected_topology},
+        {"skeleton_splits", s.skeleton_splits},
+        {"skeleton_collapses", s.skeleton_collapses},
+        {"intersecting_faces_before_repair", s.intersecting_faces_before_repair},
+        {"repair_splits", s.repair_splits},
+        {"polish_bad_before", s.polish_bad_before},
+        {"polish_bad_after", s.polish_bad_after},
+        {"polish_moves", s.polish_moves},
+        {"polish_flips", s.polish_flips},
+        {"seconds_setup", s.seconds_setup},
+        {"seconds_adapt", s.seconds_adapt},
+        {"seconds_count", s.seconds_count},
+        {"seconds_regularize", s.seconds_regularize},
+        {"seconds_smooth", s.seconds_smooth},
+        {"seconds_total", s.seconds_total}}},
+      {"quality", nlohmann::json::parse(q.to_json())}};
+  write_file_atomically(outputs.stage(dir / "report.json"), json_text(report) + "\n");
   write_png(outputs.stage(dir / "quality.png"), render_quality(r));
   write_png(outputs.stage(dir / "histograms.png"), quality_histograms(q));
   write_png(outputs.stage(dir / "density.png"), render_density(input, r.density));
   outputs.commit();
   folder.keep();
-  std::cout << std::fixed << std::setprecision(3) << "remesh: " << s.input_vertices << " -> "
-            << s.output_vertices << " vertices, " << s.output_faces << " faces in "
-            << s.seconds_total << " s\n"
-            << "  skeleton: " << s.skeleton_segments << " segments, " << s.branch_vertices
-            << " branch vertices, " << s.patches << " patches\n"
-            << "  min angle " << q.min_angle_deg
-            << " deg, >= 30 deg: " << 100 * q.fraction_min_angle_ge_30 << " %, mean Q " << q.q_mean
-            << ", irregular valence " << 100 * q.fraction_irregular << " %\n"
-            << "  triangles < 30 deg at: branch " << q.bad_at_branch << ", boundary "
-            << q.bad_at_boundary << ", other skeleton " << q.bad_at_skeleton << ", interior "
-            << q.bad_interior << "\n"
-            << "  Hausdorff " << q.hausdorff << " mm (" << 100 * q.hausdorff / q.bbox_diagonal
-            << " % of the diagonal), mean distance " << q.mean_distance << " mm\n"
-            << "  polish: faces < " << a.polish_angle << " deg " << s.polish_bad_before << " -> "
-            << s.polish_bad_after << " (" << s.polish_moves << " moves, " << s.polish_flips
-            << " flips); repair splits " << s.repair_splits;
+  std::ostringstream text;
+  text << std::fixed << std::setprecision(3) << "remesh: " << s.input_vertices << " -> "
+       << s.output_vertices << " vertices, " << s.output_faces << " faces in " << s.seconds_total
+       << " s\n"
+       << "  skeleton: " << s.skeleton_segments << " segments, " << s.branch_vertices
+       << " branch vertices, " << s.patches << " patches\n"
+       << "  min angle " << q.min_angle_deg
+       << " deg, >= 30 deg: " << 100 * q.fraction_min_angle_ge_30 << " %, mean Q " << q.q_mean
+       << ", irregular valence " << 100 * q.fraction_irregular << " %\n"
+       << "  triangles < 30 deg at: branch " << q.bad_at_branch << ", boundary "
+       << q.bad_at_boundary << ", other skeleton " << q.bad_at_skeleton << ", interior "
+       << q.bad_interior << "\n"
+       << "  Hausdorff " << q.hausdorff << " mm (" << 100 * q.hausdorff / q.bbox_diagonal
+       << " % of the diagonal), mean distance " << q.mean_distance << " mm\n"
+       << "  polish: faces < " << a.polish_angle << " deg " << s.polish_bad_before << " -> "
+       << s.polish_bad_after << " (" << s.polish_moves << " moves, " << s.polish_flips
+       << " flips); repair splits " << s.repair_splits;
   if (q.self_intersections_checked)
-    std::cout << ", self-intersections " << q.self_intersections << " (faces cutting another "
-              << "before the repair pass: " << s.intersecting_faces_before_repair << ")";
-  std::cout << "\nwrote " << a.out
-            << "/{mesh.ply,report.json,quality.png,histograms.png,density.png}\n";
+    text << ", self-intersections " << q.self_intersections << " (faces cutting another "
+         << "before the repair pass: " << s.intersecting_faces_before_repair << ")";
+  text << "\nwrote " << a.out << "/{mesh.ply,report.json,quality.png,histograms.png,density.png}\n";
+  say() << text.str();
+  result() = report;
+  result()["out"] = a.out;
   return kSuccess;
 }
 

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <tuple>
 
 #include "calibration_capture.h"
@@ -41,20 +42,45 @@ struct CalibrateArgs {
 int report_calibration(const CalibrationReport& rep, const std::string& out) {
   const Calibration& c = rep.calibration;
   c.write_yaml(out);
-  std::printf("calibrated from %d views (%d not found): %d corners, %d laser points\n",
-              rep.views_detected, rep.views_rejected, c.corners, c.laser_points);
-  std::printf("  reprojection RMS %.4f px (OpenCV initial %.4f px), laser RMS %.4f mm\n",
-              c.reprojection_rms_px, rep.opencv_rms_px, c.laser_rms_mm);
-  std::printf("  fx %.3f +- %.3f  fy %.3f +- %.3f  cx %.3f +- %.3f  cy %.3f +- %.3f\n", c.camera.fx,
-              c.uncertainty.fx, c.camera.fy, c.uncertainty.fy, c.camera.cx, c.uncertainty.cx,
-              c.camera.cy, c.uncertainty.cy);
+  sayf("calibrated from %d views (%d not found): %d corners, %d laser points\n", rep.views_detected,
+       rep.views_rejected, c.corners, c.laser_points);
+  sayf("  reprojection RMS %.4f px (OpenCV initial %.4f px), laser RMS %.4f mm\n",
+       c.reprojection_rms_px, rep.opencv_rms_px, c.laser_rms_mm);
+  sayf("  fx %.3f +- %.3f  fy %.3f +- %.3f  cx %.3f +- %.3f  cy %.3f +- %.3f\n", c.camera.fx,
+       c.uncertainty.fx, c.camera.fy, c.uncertainty.fy, c.camera.cx, c.uncertainty.cx, c.camera.cy,
+       c.uncertainty.cy);
   for (std::size_t k = 0; k < c.lasers.size(); ++k)
-    std::printf("  laser %s: normal +- %.4f deg, distance %.3f +- %.4f mm\n",
-                c.lasers[k].name.c_str(), c.uncertainty.laser_normal_deg[k],
-                c.lasers[k].distance_mm, c.uncertainty.laser_distance_mm[k]);
-  std::printf("  axis direction +- %.4f deg, axis point +- %.4f mm\n",
-              c.uncertainty.axis_direction_deg, c.uncertainty.axis_point_mm);
-  std::printf("wrote %s\n", out.c_str());
+    sayf("  laser %s: normal +- %.4f deg, distance %.3f +- %.4f mm\n", c.lasers[k].name.c_str(),
+         c.uncertainty.laser_normal_deg[k], c.lasers[k].distance_mm,
+         c.uncertainty.laser_distance_mm[k]);
+  sayf("  axis direction +- %.4f deg, axis point +- %.4f mm\n", c.uncertainty.axis_direction_deg,
+       c.uncertainty.axis_point_mm);
+  sayf("wrote %s\n", out.c_str());
+  nlohmann::json lasers = nlohmann::json::array();
+  for (std::size_t k = 0; k < c.lasers.size(); ++k)
+    lasers.push_back({{"name", c.lasers[k].name},
+                      {"distance_mm", c.lasers[k].distance_mm},
+                      {"normal_uncertainty_deg", c.uncertainty.laser_normal_deg[k]},
+                      {"distance_uncertainty_mm", c.uncertainty.laser_distance_mm[k]}});
+  result() = {
+      {"out", out},
+      {"views_detected", rep.views_detected},
+      {"views_rejected", rep.views_rejected},
+      {"corners", c.corners},
+      {"laser_points", c.laser_points},
+      {"reprojection_rms_px", c.reprojection_rms_px},
+      {"opencv_rms_px", rep.opencv_rms_px},
+      {"laser_rms_mm", c.laser_rms_mm},
+      {"camera",
+       {{"fx", c.camera.fx}, {"fy", c.camera.fy}, {"cx", c.camera.cx}, {"cy", c.camera.cy}}},
+      {"camera_uncertainty",
+       {{"fx", c.uncertainty.fx},
+        {"fy", c.uncertainty.fy},
+        {"cx", c.uncertainty.cx},
+        {"cy", c.uncertainty.cy}}},
+      {"lasers", lasers},
+      {"axis_direction_uncertainty_deg", c.uncertainty.axis_direction_deg},
+      {"axis_point_uncertainty_mm", c.uncertainty.axis_point_mm}};
   return kSuccess;
 }
 
@@ -66,6 +92,10 @@ int run_calibrate_session(const CalibrateArgs& a) {
   if (!h.calibration)
     throw FileFormatError(std::filesystem::path(a.session) / "session.json",
                           "not a calibration session (record one with scan --calibration)");
+  if (session.step_count() == 0)
+    throw FileFormatError(std::filesystem::path(a.session) / "steps.jsonl",
+                          "no recorded step: nothing to calibrate from (record the session with "
+                          "'scan --calibration', or complete it with --resume)");
   if (!session.complete())
     std::cerr << "scanmesh: warning: " << a.session << " is incomplete (" << session.step_count()
               << " of " << h.step_count << " steps); 'scan --calibration --resume' completes it\n";
@@ -145,7 +175,18 @@ int run_reconstruct_from(const ScanStepSource& source, const ReconstructArgs& a)
     progress.update(static_cast<int>(done), static_cast<int>(total));
   });
   progress.finish();
-  std::printf(
+  nlohmann::json& j = result();
+  j["steps"] = st.steps;
+  j["peaks"] = st.peaks;
+  j["saturated"] = st.line.saturated;
+  j["rejected"] = {{"wide", st.line.rejected_wide},
+                   {"secondary", st.line.rejected_secondary},
+                   {"room_light", st.line.rejected_ambient}};
+  j["points_used"] = st.grid.used;
+  j["platter_points"] = st.grid.platter_points;
+  j["weak_points"] = st.grid.weak_points;
+  j["cells"] = st.grid.cells;
+  sayf(
       "%zu steps: %zu peaks (%zu saturated; rejected: %zu wide, %zu secondary, %zu room "
       "light), %zu points used (%zu on the platter, %zu weak), %zu cells\n",
       st.steps, st.peaks, st.line.saturated, st.line.rejected_wide, st.line.rejected_secondary,
@@ -153,16 +194,27 @@ int run_reconstruct_from(const ScanStepSource& source, const ReconstructArgs& a)
       st.grid.cells);
   if (a.clean) {
     const ScanCleaningReport r = clean_scan_grid(grid);
-    std::printf(
+    sayf(
         "cleaning: %zu low-confidence, %zu platter, %zu hair, %zu spikes, %zu fragment "
         "cells removed; %zu holes (%zu cells) filled; %zu -> %zu valid cells\n",
         r.low_confidence_removed, r.platter_removed, r.hair_removed, r.spikes.spikes_removed,
         r.spikes.fragment_cells_removed, r.holes_filled, r.cells_filled, r.valid_before,
         r.valid_after);
+    j["cleaning"] = {{"low_confidence_removed", r.low_confidence_removed},
+                     {"platter_removed", r.platter_removed},
+                     {"hair_removed", r.hair_removed},
+                     {"spikes_removed", r.spikes.spikes_removed},
+                     {"fragment_cells_removed", r.spikes.fragment_cells_removed},
+                     {"holes_filled", r.holes_filled},
+                     {"cells_filled", r.cells_filled},
+                     {"valid_before", r.valid_before},
+                     {"valid_after", r.valid_after}};
   }
   grid.metadata["calibration"] = a.calib;
   write_grid(a.out, grid);
-  std::printf("wrote %s\n", a.out.c_str());
+  sayf("wrote %s\n", a.out.c_str());
+  j["out"] = a.out;
+  j["valid_cells"] = grid.valid_count();
   return kSuccess;
 }
 

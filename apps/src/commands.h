@@ -37,7 +37,6 @@ int run_sim(const SimArgs& args);
 
 struct InfoArgs {
   std::string file;
-  bool json = false;
 };
 int run_info(const InfoArgs& args);
 

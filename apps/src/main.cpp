@@ -1,5 +1,6 @@
 // scanmesh: one binary, one subcommand per pipeline stage (docs/cli.md).
 #include <CLI/CLI.hpp>
+#include <csignal>
 #include <iostream>
 
 #include "cli_support.h"
@@ -34,6 +35,10 @@ void add_mesh_options(CLI::App& cmd, scanmesh::GridMeshOptions& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // A file-size limit (ulimit -f) must end a write with an error (EFBIG: exit 5, the staged
+  // outputs removed), not kill the process with SIGXFSZ half way (exit 153, a texture and a
+  // temporary left behind).
+  std::signal(SIGXFSZ, SIG_IGN);
   CLI::App app{"scanmesh: rotary laser scans to range grids to meshes", "scanmesh"};
   app.set_version_flag("--version", SCANMESH_VERSION);
   app.require_subcommand(1);
@@ -53,7 +58,6 @@ int main(int argc, char** argv) {
   InfoArgs info;
   auto* info_cmd = app.add_subcommand("info", "Describe a grid (.smg) or mesh (.ply .off .obj .stl) file");
   info_cmd->add_option("file", info.file, "Grid or mesh file")->required();
-  info_cmd->add_flag("--json", info.json, "Print JSON instead of text");
 
   ExportArgs exp;
   auto* export_cmd =
@@ -86,8 +90,13 @@ int main(int argc, char** argv) {
   add_mesh_options(*gm_cmd, gm.options);
 
   RenderArgs render;
-  auto* render_cmd = app.add_subcommand("render", "Render a mesh (.ply .off .obj .stl) to a shaded PNG");
-  render_cmd->add_option("mesh", render.mesh, "Mesh file (.ply, .off, .obj, .stl)")->required();
+  auto* render_cmd = app.add_subcommand(
+      "render", "Render a mesh (.ply .off .obj .stl) or a point cloud (.xyz .pcd) to a shaded PNG");
+  render_cmd
+      ->add_option("mesh", render.mesh,
+                   "Mesh (.ply .off .obj .stl) or point cloud (.xyz .txt .pts .pcd, or a PLY "
+                   "without faces): drawn as points")
+      ->required();
   render_cmd->add_option("-o,--out", render.out, "Output PNG")->required();
   render_cmd->add_option("--size", render.size, "Image size in pixels")
       ->capture_default_str()
@@ -213,6 +222,7 @@ int main(int argc, char** argv) {
   register_remesh_commands(app, commands);
   register_measure_commands(app, commands);
   register_import_commands(app, commands);
+  add_output_flags(app);  // --json and --quiet on every subcommand (docs/cli.md, "Output")
 
   try {
     app.parse(argc, argv);
@@ -230,6 +240,7 @@ int main(int argc, char** argv) {
               << "--help')\n";
     return kUsageError;
   }
+  set_output_mode(parsed_output_mode(app));
 
   return run_guarded([&] {
     for (const auto& c : commands)

@@ -4,10 +4,12 @@
 #include <png.h>
 #include <Eigen/Core>
 
+#include <cstdio>
 #include <system_error>
 
 #include "cli_support.h"
 #include "scanmesh/core/errors.h"
+#include "scanmesh/core/image_text.h"
 #include "scanmesh/core/mesh_io.h"
 #include "scanmesh/meshing/mesh_topology.h"
 
@@ -31,10 +33,22 @@ sim::SimulatedScan simulate_with_progress(const sim::Scene& scene,
 }
 
 Image8 render_views(const Mesh& mesh, int view_size) {
+  // The built-in head looks towards azimuth 180 deg, so these are its front, three-quarter and
+  // side views; each view names its camera so that other objects' views can be told apart.
+  struct View {
+    double azimuth;
+    const char* name;
+  };
   std::vector<Image8> views;
-  for (double azimuth : {180.0, 225.0, 270.0})
-    views.push_back(
-        render_mesh(mesh, {.width = view_size, .height = view_size, .azimuth_deg = azimuth}));
+  for (const View& v : {View{180.0, "FRONT"}, View{225.0, "THREE-QUARTER"}, View{270.0, "SIDE"}}) {
+    Image8 image =
+        render_mesh(mesh, {.width = view_size, .height = view_size, .azimuth_deg = v.azimuth});
+    const int scale = view_size >= 400 ? 2 : 1;
+    char caption[64];
+    std::snprintf(caption, sizeof caption, "%s (AZIMUTH %.0f)", v.name, v.azimuth);
+    draw_text(image, 8 * scale, 8 * scale, caption, {220, 220, 220}, scale);
+    views.push_back(std::move(image));
+  }
   return hconcat(views);
 }
 

@@ -5,11 +5,14 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 #include <vector>
 
 #include "scanmesh/core/atomic_file.h"
+#include "scanmesh/core/image_text.h"
+#include "scanmesh/core/texture_layout.h"
 
 namespace scanmesh {
 
@@ -65,32 +68,90 @@ void export_ply_points(const std::filesystem::path& path, const RangeGrid& grid)
 Image8 texture_image(const RangeGrid& grid) {
   Image8 image(grid.n_phi(), grid.n_h(), 3);
   for (int j = 0; j < grid.n_h(); ++j)
-    for (int i = 0; i < grid.n_phi(); ++i) image.set_rgb(i, j, grid.color(i, j));
+    for (int i = 0; i < grid.n_phi(); ++i)
+      image.set_rgb(i, texture_row(j, grid.n_h()), grid.color(i, j));
   return image;
 }
 
-Image8 depth_image(const RangeGrid& grid) {
-  // Valid radii map linearly from [r_min, r_max] to grey [40, 255]; 40 rather than 0 keeps the
-  // nearest valid cells distinguishable from holes (0).
-  constexpr double kDarkest = 40.0, kBrightest = 255.0;
-  Image8 image(grid.n_phi(), grid.n_h(), 1, 0);
-  float r_min = std::numeric_limits<float>::infinity();
-  float r_max = -std::numeric_limits<float>::infinity();
+namespace {
+
+// Valid radii map linearly from [r_min, r_max] to grey [40, 255]; 40 rather than 0 keeps the
+// nearest valid cells distinguishable from holes (0).
+constexpr double kDarkest = 40.0, kBrightest = 255.0;
+
+struct RadiusRange {
+  float min = std::numeric_limits<float>::infinity();
+  float max = -std::numeric_limits<float>::infinity();
+  bool empty() const { return !(min <= max); }
+};
+
+RadiusRange radius_range(const RangeGrid& grid) {
+  RadiusRange range;
   for (std::size_t k = 0; k < grid.cell_count(); ++k)
     if (grid.validity()[k]) {
-      r_min = std::min(r_min, grid.radii()[k]);
-      r_max = std::max(r_max, grid.radii()[k]);
+      range.min = std::min(range.min, grid.radii()[k]);
+      range.max = std::max(range.max, grid.radii()[k]);
     }
-  if (!(r_min <= r_max)) return image;  // no valid cell: all black
-  const double span = static_cast<double>(r_max) - r_min;
+  return range;
+}
+
+std::uint8_t depth_grey(double t) {
+  return static_cast<std::uint8_t>(std::lround(kDarkest + t * (kBrightest - kDarkest)));
+}
+
+// "123.4" (mm): enough digits to tell the ends of a scan's radius range apart.
+std::string millimetres(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, std::abs(v) < 1e4 ? "%.1f" : "%.3g", v);
+  return buf;
+}
+
+}  // namespace
+
+Image8 depth_image(const RangeGrid& grid) {
+  Image8 image(grid.n_phi(), grid.n_h(), 1, 0);
+  const RadiusRange range = radius_range(grid);
+  if (range.empty()) return image;  // no valid cell: all black
+  const double span = static_cast<double>(range.max) - range.min;
   for (int j = 0; j < grid.n_h(); ++j)
     for (int i = 0; i < grid.n_phi(); ++i) {
       if (!grid.valid(i, j)) continue;
       // A flat depth range (all radii equal) shows as the brightest grey.
-      const double t = span > 0 ? (grid.radius(i, j) - r_min) / span : 1.0;
-      image.at(i, j)[0] =
-          static_cast<std::uint8_t>(std::lround(kDarkest + t * (kBrightest - kDarkest)));
+      const double t = span > 0 ? (grid.radius(i, j) - range.min) / span : 1.0;
+      image.at(i, texture_row(j, grid.n_h()))[0] = depth_grey(t);
     }
+  return image;
+}
+
+Image8 depth_picture(const RangeGrid& grid) {
+  const Image8 depth = depth_image(grid);
+  const RadiusRange range = radius_range(grid);
+  // Legend strip on the right: the title, a grey bar from the largest radius (top) to the
+  // smallest (bottom) and their values in mm, like the curvature pictures' legend.
+  constexpr int kLegendWidth = 70, kLegendMinHeight = 120, kBarWidth = 12;
+  const Rgb8 paper{255, 255, 255}, ink{0, 0, 0};
+  Image8 image(depth.width + kLegendWidth, std::max(depth.height, kLegendMinHeight), 3);
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) image.set_rgb(x, y, paper);
+  for (int y = 0; y < depth.height; ++y)
+    for (int x = 0; x < depth.width; ++x) {
+      const std::uint8_t g = depth.at(x, y)[0];
+      image.set_rgb(x, y, {g, g, g});
+    }
+  const int x0 = depth.width + 4, bar_top = 20, bar_bottom = image.height - 10;
+  draw_text(image, x0 - 1, 4, "r [mm]", ink);
+  if (range.empty()) {
+    draw_text(image, x0, bar_top, "NO DATA", ink);
+    return image;
+  }
+  for (int y = bar_top; y <= bar_bottom; ++y) {
+    const std::uint8_t g =
+        depth_grey(1.0 - (y - bar_top) / static_cast<double>(bar_bottom - bar_top));
+    for (int x = x0; x < x0 + kBarWidth; ++x) image.set_rgb(x, y, {g, g, g});
+  }
+  const int label_x = x0 + kBarWidth + 3;
+  draw_text(image, label_x, bar_top, millimetres(range.max), ink);
+  draw_text(image, label_x, bar_bottom - text_height() + 1, millimetres(range.min), ink);
   return image;
 }
 
@@ -99,7 +160,7 @@ void export_texture_png(const std::filesystem::path& path, const RangeGrid& grid
 }
 
 void export_depth_png(const std::filesystem::path& path, const RangeGrid& grid) {
-  write_png(path, depth_image(grid));
+  write_png(path, depth_picture(grid));
 }
 
 }  // namespace scanmesh

@@ -2,6 +2,7 @@
 // a message buffer instead of longjmp, so no C++ object is ever skipped by a non-local jump.
 #include <png.h>
 
+#include <algorithm>
 #include <string>
 
 #include "scanmesh/core/atomic_file.h"
@@ -47,6 +48,14 @@ Rgb8 Image8::rgb(int x, int y) const {
   const std::uint8_t* p = at(x, y);
   if (channels < 3) return {p[0], p[0], p[0]};
   return {p[0], p[1], p[2]};
+}
+
+void flip_rows(Image8& image) {
+  const std::size_t row = static_cast<std::size_t>(image.width) * image.channels;
+  for (int top = 0, bottom = image.height - 1; top < bottom; ++top, --bottom)
+    std::swap_ranges(image.pixels.begin() + static_cast<std::ptrdiff_t>(top * row),
+                     image.pixels.begin() + static_cast<std::ptrdiff_t>((top + 1) * row),
+                     image.pixels.begin() + static_cast<std::ptrdiff_t>(bottom * row));
 }
 
 void write_png(const std::filesystem::path& path, const Image8& image) {

@@ -14,10 +14,12 @@ namespace {
 constexpr int kNoVertex = -1;
 
 // Texture coordinate of cell column `column` (unwrapped: column n_phi is column 0 seen from the
-// seam, u > 1, so the seam triangles do not stretch across the whole texture) and row j.
+// seam, u > 1, so the seam triangles do not stretch across the whole texture) and row j. OBJ's
+// v runs up from the bottom of the image, and the texture is upright (highest h at the top,
+// core/texture_layout.h), so v grows with h.
 Eigen::Vector2f texcoord(int column, int j, const RangeGrid& grid) {
   return {static_cast<float>((column + 0.5) / grid.n_phi()),
-          static_cast<float>(1.0 - (j + 0.5) / grid.n_h())};
+          static_cast<float>((j + 0.5) / grid.n_h())};
 }
 
 bool depth_jump(const RangeGrid& grid, const std::array<std::size_t, 4>& cells, double limit) {

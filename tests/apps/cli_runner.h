@@ -22,10 +22,11 @@ inline const std::filesystem::path& scanmesh_binary() {
   return binary;
 }
 
-//! `scanmesh ARGS 2>&1`; ARGS is passed to the shell as written.
-inline RunResult run(const std::string& args) {
+//! `scanmesh ARGS 2>&1`; ARGS is passed to the shell as written. `stderr_to` other than "&1"
+//! sends stderr elsewhere (run_stdout: to /dev/null, for output that must be stdout alone).
+inline RunResult run(const std::string& args, const std::string& stderr_to = "&1") {
   RunResult result;
-  FILE* pipe = popen((scanmesh_binary().string() + " " + args + " 2>&1").c_str(), "r");
+  FILE* pipe = popen((scanmesh_binary().string() + " " + args + " 2>" + stderr_to).c_str(), "r");
   if (!pipe) return result;
   std::array<char, 4096> buffer{};
   while (std::fgets(buffer.data(), buffer.size(), pipe)) result.output += buffer.data();
@@ -33,5 +34,8 @@ inline RunResult run(const std::string& args) {
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return result;
 }
+
+//! `scanmesh ARGS 2>/dev/null`: what a program reading stdout gets.
+inline RunResult run_stdout(const std::string& args) { return run(args, "/dev/null"); }
 
 }  // namespace scanmesh::test

@@ -17,6 +17,7 @@
 #include "scanmesh/core/grid_file.h"
 #include "scanmesh/core/image.h"
 #include "scanmesh/core/mesh_io.h"
+#include "scanmesh/core/texture_layout.h"
 
 namespace scanmesh {
 namespace {
@@ -134,12 +135,15 @@ TEST_F(Demo, ObjTexcoordsMapEachVertexToItsOwnTexturePixel) {
         const int ti = std::stoi(corner.substr(corner.find('/') + 1)) - 1;
         const Eigen::Vector3d& p = v.at(vi);
         const Eigen::Vector2d& t = vt.at(ti);
+        // OBJ's v counts up from the picture's bottom row; the texture is upright, so the
+        // picture row is also the grid row counted from the top (core/texture_layout.h).
         const int px = static_cast<int>(std::floor(t.x() * texture.width)) % texture.width;
-        const int py = static_cast<int>(std::floor((1.0 - t.y()) * texture.height));
-        // The pixel's cell, lifted to 3D, is the vertex itself.
-        ASSERT_TRUE(grid.valid(px, py));
-        EXPECT_LT((grid.cartesian(px, py) - p).norm(), 1e-3) << "corner " << corner;
-        EXPECT_EQ(texture.rgb(px, py), grid.color(px, py));
+        const int row = static_cast<int>(std::floor((1.0 - t.y()) * texture.height));
+        const int j = texture_row(row, texture.height);  // its own inverse
+        // The pixel's cell, lifted to 3D, is the vertex itself, and the pixel has its colour.
+        ASSERT_TRUE(grid.valid(px, j));
+        EXPECT_LT((grid.cartesian(px, j) - p).norm(), 1e-3) << "corner " << corner;
+        EXPECT_EQ(texture.rgb(px, row), grid.color(px, j));
         ++corners;
       }
     }

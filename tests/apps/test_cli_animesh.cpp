@@ -130,7 +130,7 @@ TEST_F(CliAnimesh, OpenFrontsWriteEverythingAndExitNine) {
 
 TEST_F(CliAnimesh, MalformedSettingsNameTheFileAndLine) {
   const fs::path settings = dir_ / "bad.yaml";
-  std::ofstream(settings) << "unit_mm: 10\nregions:\n  - {name: nose, point: [256, 230], "
+  std::ofstream(settings) << "unit_mm: 10\nregions:\n  - {name: nose, point: [256, 282], "
                              "unit_mm: -3}\n";
   const auto r = run("animesh " + (dir_ / "head.smg").string() + " --lines " +
                      (kConfigs / "head-lines.svg").string() + " --settings " + settings.string() +

@@ -73,9 +73,10 @@ class CliPartialScan : public ::testing::Test {
 fs::path CliPartialScan::dir_;
 
 TEST_F(CliPartialScan, AnimeshWithALineThatDoesNotCloseFindsTheRegionsOfTheBorder) {
-  // Across the face under the eyes, from outside the data to outside the data.
+  // Across the face under the eyes, from outside the data to outside the data (y counts down
+  // from the top of the upright 512-row texture: h row 235 is y = 512 - 235).
   const fs::path lines = dir_ / "across.json";
-  write_text(lines, R"({"lines": [{"id": "across", "points": [[150, 235], [360, 235]]}]})");
+  write_text(lines, R"({"lines": [{"id": "across", "points": [[150, 277], [360, 277]]}]})");
   const fs::path out = dir_ / "anim";
   const auto r = run("animesh " + grid() + " --lines " + lines.string() + " --out " + out.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;

@@ -4,6 +4,7 @@
 
 #include "scanmesh/core/grid_export.h"
 #include "scanmesh/core/mesh_io.h"
+#include "scanmesh/core/texture_layout.h"
 #include "test_util.h"
 
 namespace scanmesh {
@@ -48,7 +49,7 @@ TEST(GridExport, PlyPointsHaveOneVertexPerValidCell) {
             std::string::npos);
 }
 
-TEST(GridExport, TexturePngEqualsColorsPixelForPixel) {
+TEST(GridExport, TexturePngIsUprightAndEqualsColorsPixelForPixel) {
   TempDir dir;
   const RangeGrid grid = textured_grid(64, 40);
   export_texture_png(dir / "texture.png", grid);
@@ -58,8 +59,14 @@ TEST(GridExport, TexturePngEqualsColorsPixelForPixel) {
   ASSERT_EQ(image.channels, 3);
   int mismatches = 0;
   for (int j = 0; j < grid.n_h(); ++j)
-    for (int i = 0; i < grid.n_phi(); ++i) mismatches += !(image.rgb(i, j) == grid.color(i, j));
+    for (int i = 0; i < grid.n_phi(); ++i)
+      mismatches += !(image.rgb(i, texture_row(j, grid.n_h())) == grid.color(i, j));
   EXPECT_EQ(mismatches, 0);
+  // Upright: the top row is the highest h, the bottom row the lowest.
+  for (int i = 0; i < grid.n_phi(); ++i) {
+    EXPECT_EQ(image.rgb(i, 0), grid.color(i, grid.n_h() - 1));
+    EXPECT_EQ(image.rgb(i, image.height - 1), grid.color(i, 0));
+  }
   EXPECT_EQ(texture_image(grid).pixels, image.pixels);
 }
 
@@ -73,24 +80,46 @@ TEST(GridExport, DepthImageIsDarkNearAndBrightFarAndBlackInHoles) {
   ASSERT_EQ(depth.channels, 1);
   ASSERT_EQ(depth.width, 4);
   ASSERT_EQ(depth.height, 2);
-  EXPECT_EQ(depth.at(0, 0)[0], 40);   // r_min
-  EXPECT_EQ(depth.at(1, 0)[0], 94);   // 40 + 215 / 4 = 93.75
-  EXPECT_EQ(depth.at(2, 0)[0], 148);  // 40 + 215 / 2 = 147.5
-  EXPECT_EQ(depth.at(0, 1)[0], 255);  // r_max
-  EXPECT_EQ(depth.at(3, 0)[0], 0);    // invalid
-  EXPECT_EQ(depth.at(3, 1)[0], 0);
+  // Upright: grid row 1 (the higher h) is the picture's top row 0.
+  EXPECT_EQ(depth.at(0, 1)[0], 40);   // r_min
+  EXPECT_EQ(depth.at(1, 1)[0], 94);   // 40 + 215 / 4 = 93.75
+  EXPECT_EQ(depth.at(2, 1)[0], 148);  // 40 + 215 / 2 = 147.5
+  EXPECT_EQ(depth.at(0, 0)[0], 255);  // r_max
+  EXPECT_EQ(depth.at(3, 1)[0], 0);    // invalid
+  EXPECT_EQ(depth.at(3, 0)[0], 0);
 
   const Image8 empty = depth_image(RangeGrid(5, 3));
   EXPECT_EQ(empty.pixels, std::vector<std::uint8_t>(15, 0));
 }
 
-TEST(GridExport, DepthPngReadsBackAsGrey) {
+TEST(GridExport, DepthPngIsTheDepthImageWithAMillimetreScale) {
   TempDir dir;
   const RangeGrid grid = textured_grid(32, 16);
   export_depth_png(dir / "depth.png", grid);
   const Image8 image = read_png(dir / "depth.png");
-  EXPECT_EQ(image.channels, 1);
-  EXPECT_EQ(image.pixels, depth_image(grid).pixels);
+  const Image8 depth = depth_image(grid);
+  ASSERT_EQ(image.channels, 3);
+  ASSERT_GT(image.width, depth.width + 40);  // a legend strip beside the picture
+  ASSERT_GE(image.height, depth.height);
+  int mismatches = 0;
+  for (int y = 0; y < depth.height; ++y)
+    for (int x = 0; x < depth.width; ++x) {
+      const std::uint8_t g = depth.at(x, y)[0];
+      mismatches += !(image.rgb(x, y) == Rgb8{g, g, g});
+    }
+  EXPECT_EQ(mismatches, 0);
+  // The scale's bar runs from the largest radius's grey (255) at the top to the smallest's (40)
+  // at the bottom, and the strip carries text (title and the two radii in mm) in black.
+  int bar_x = -1;
+  for (int x = depth.width; x < image.width && bar_x < 0; ++x)
+    if (image.rgb(x, 20) == Rgb8{255, 255, 255} &&
+        image.rgb(x, image.height - 10) == Rgb8{40, 40, 40})
+      bar_x = x;
+  EXPECT_GE(bar_x, 0) << "no grey bar from 255 down to 40 in the legend";
+  int ink = 0;
+  for (int y = 0; y < image.height; ++y)
+    for (int x = depth.width; x < image.width; ++x) ink += image.rgb(x, y) == Rgb8{0, 0, 0};
+  EXPECT_GT(ink, 100);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <set>
 
 #include "scanmesh/core/errors.h"
+#include "scanmesh/core/texture_layout.h"
 #include "scanmesh/meshing/grid_mesh.h"
 #include "scanmesh/meshing/mesh_topology.h"
 #include "scanmesh/sim/range_scanner.h"
@@ -100,7 +101,7 @@ TEST(GridMesh, DepthJumpsGetNoTriangles) {
   EXPECT_EQ(grid_mesh(grid, options).quads_skipped_for_depth_jumps, 0u);
 }
 
-TEST(GridMesh, TexcoordsPointAtEachVertexOwnPixelAcrossTheSeam) {
+TEST(GridMesh, TexcoordsPointAtEachVertexOwnPixelOfTheUprightTextureAcrossTheSeam) {
   const RangeGrid grid = cylinder_grid(32, 12, 50.0f);
   const GridMesh gm = grid_mesh(grid);
   ASSERT_TRUE(gm.mesh.has_texcoords());
@@ -112,7 +113,8 @@ TEST(GridMesh, TexcoordsPointAtEachVertexOwnPixelAcrossTheSeam) {
       const int px = static_cast<int>(std::floor(uv.x() * grid.n_phi())) % grid.n_phi();
       const int py = static_cast<int>(std::floor((1.0f - uv.y()) * grid.n_h()));
       EXPECT_EQ(px, static_cast<int>(cell % grid.n_phi()));
-      EXPECT_EQ(py, static_cast<int>(cell / grid.n_phi()));
+      // OBJ's v counts up from the image's bottom; the texture is upright.
+      EXPECT_EQ(py, texture_row(static_cast<int>(cell / grid.n_phi()), grid.n_h()));
       u_min = std::min(u_min, uv.x());
       u_max = std::max(u_max, uv.x());
     }

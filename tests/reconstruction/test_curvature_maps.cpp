@@ -23,12 +23,13 @@ TEST(GreyMap, ScalesClampsAndBlackensUndefinedCells) {
   ASSERT_EQ(image.width, 3);
   ASSERT_EQ(image.height, 2);
   ASSERT_EQ(image.channels, 1);
-  EXPECT_EQ(image.at(0, 0)[0], 0);
-  EXPECT_EQ(image.at(1, 0)[0], 128);  // 1 / 2 of 255, rounded
-  EXPECT_EQ(image.at(2, 0)[0], 255);
-  EXPECT_EQ(image.at(0, 1)[0], 255);  // 5 clamped
-  EXPECT_EQ(image.at(1, 1)[0], 0);    // negative clamped
-  EXPECT_EQ(image.at(2, 1)[0], 0);    // undefined: black
+  // Upright: grid row 0 (the lowest h) is the picture's bottom row.
+  EXPECT_EQ(image.at(0, 1)[0], 0);
+  EXPECT_EQ(image.at(1, 1)[0], 128);  // 1 / 2 of 255, rounded
+  EXPECT_EQ(image.at(2, 1)[0], 255);
+  EXPECT_EQ(image.at(0, 0)[0], 255);  // 5 clamped
+  EXPECT_EQ(image.at(1, 0)[0], 0);    // negative clamped
+  EXPECT_EQ(image.at(2, 0)[0], 0);    // undefined: black
 }
 
 TEST(GreyMap, AutomaticScaleIsThe99thPercentile) {
@@ -36,8 +37,8 @@ TEST(GreyMap, AutomaticScaleIsThe99thPercentile) {
   for (int k = 0; k < 100; ++k) v[k] = static_cast<float>(k);
   const std::vector<std::uint8_t> d(100, 1);
   const Image8 image = grey_map(v, d, 10, 10);
-  EXPECT_EQ(image.at(8, 9)[0], 255);  // value 98 = the 99th percentile of 0..99
-  EXPECT_EQ(image.at(9, 4)[0], 128);  // value 49: 49 / 98 of 255
+  EXPECT_EQ(image.at(8, 0)[0], 255);  // value 98 (row 9, the top) = the 99th percentile
+  EXPECT_EQ(image.at(9, 5)[0], 128);  // value 49 (row 4): 49 / 98 of 255
   EXPECT_THROW(grey_map(v, d, 10, 9), InvalidInputError);
 }
 
@@ -56,7 +57,7 @@ TEST(DivergingMap, PositiveRedNegativeBlueZeroWhiteUndefinedGreyAndALegend) {
   EXPECT_GT(pos.r, pos.b + 100) << int(pos.r) << " " << int(pos.g) << " " << int(pos.b);
   EXPECT_GT(neg.b, neg.r + 100) << int(neg.r) << " " << int(neg.g) << " " << int(neg.b);
   EXPECT_EQ(image.rgb(25, 3), (Rgb8{255, 255, 255}));
-  EXPECT_EQ(image.rgb(30, 5), (Rgb8{40, 40, 40}));
+  EXPECT_EQ(image.rgb(30, h - 1 - 5), (Rgb8{40, 40, 40}));  // grid row 5, upright
   // Half the scale is half way to the end colour, the same distance on both sides.
   std::vector<float> half = {0.01f, -0.01f};
   const Image8 h2 = diverging_map(half, {1, 1}, 2, 1, "K", 0.02);
@@ -93,9 +94,40 @@ TEST(NormalMap, MapsUnitNormalsToRgbAndUndefinedToBlack) {
   const Image8 image = normal_map(f);
   ASSERT_EQ(image.width, 3);
   ASSERT_EQ(image.height, 2);
-  EXPECT_EQ(image.rgb(0, 0), (Rgb8{255, 128, 128}));
-  EXPECT_EQ(image.rgb(1, 1), (Rgb8{128, 0, 128}));
-  EXPECT_EQ(image.rgb(2, 1), (Rgb8{0, 0, 0}));
+  EXPECT_EQ(image.rgb(0, 1), (Rgb8{255, 128, 128}));  // cell (0, 0): the bottom row
+  EXPECT_EQ(image.rgb(1, 0), (Rgb8{128, 0, 128}));    // cell (1, 1): the top row
+  EXPECT_EQ(image.rgb(2, 0), (Rgb8{0, 0, 0}));
+}
+
+// Every map of a grid plane is upright (core/texture_layout.h): a field that grows with h is
+// brightest (grey), reddest (diverging) at the TOP of the picture, and the highest row's normals
+// are the top row's colour.
+TEST(Maps, AreUprightTheHighestRowAtTheTop) {
+  constexpr int w = 8, h = 16;
+  std::vector<float> v(w * h);
+  const std::vector<std::uint8_t> d(w * h, 1);
+  for (int j = 0; j < h; ++j)
+    for (int i = 0; i < w; ++i) v[j * w + i] = static_cast<float>(j) - 7.5f;  // grows with h
+  const Image8 grey = grey_map(v, d, w, h, 7.5);
+  for (int i = 0; i < w; ++i) {
+    EXPECT_EQ(grey.at(i, 0)[0], 255) << "top row = the highest h";
+    EXPECT_EQ(grey.at(i, h - 1)[0], 0) << "bottom row = the lowest h (negative, clamped)";
+  }
+  const Image8 div = diverging_map(v, d, w, h, "H", 7.5);
+  EXPECT_EQ(div.rgb(3, 0), (Rgb8{200, 40, 40}));      // +7.5 at the top: full red
+  EXPECT_EQ(div.rgb(3, h - 1), (Rgb8{40, 90, 200}));  // -7.5 at the bottom: full blue
+  SurfaceFields f;
+  f.resize(w, h);
+  for (int j = 0; j < h; ++j)
+    for (int i = 0; i < w; ++i) {
+      f.defined[j * w + i] = 1;
+      f.normal[j * w + i] = j == h - 1 ? Eigen::Vector3f(0, 0, 1) : Eigen::Vector3f(0, 0, -1);
+    }
+  const Image8 normals = normal_map(f);
+  for (int i = 0; i < w; ++i) {
+    EXPECT_EQ(normals.rgb(i, 0), (Rgb8{128, 128, 255}));  // +z: the top row only
+    EXPECT_EQ(normals.rgb(i, 1), (Rgb8{128, 128, 0}));
+  }
 }
 
 TEST(DrawText, DrawsGlyphPixelsScalesAndClips) {

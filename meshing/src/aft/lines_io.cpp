@@ -10,6 +10,7 @@
 
 #include "scanmesh/core/atomic_file.h"
 #include "scanmesh/core/errors.h"
+#include "scanmesh/core/texture_layout.h"
 #include "scanmesh/meshing/aft/animation_lines.h"
 
 namespace scanmesh::aft {
@@ -496,7 +497,9 @@ LineSet parse_lines_json(std::string_view text, const std::string& file) {
   return set;
 }
 
-LineSet read_lines(const std::filesystem::path& path) {
+namespace {
+
+LineSet read_lines_as_written(const std::filesystem::path& path) {
   const std::vector<std::uint8_t> bytes = read_file_bytes(path, kMaxTextInputBytes);
   const std::string text(bytes.begin(), bytes.end());
   std::string ext = path.extension().string();
@@ -504,6 +507,35 @@ LineSet read_lines(const std::filesystem::path& path) {
   if (ext == ".json") return parse_lines_json(text, path.string());
   if (ext == ".svg") return parse_lines_svg(text, path.string());
   throw FileFormatError(path, "animation lines must be .svg or .json");
+}
+
+}  // namespace
+
+FileRows parse_file_rows(const std::string& text) {
+  if (text == "top") return FileRows::FromTop;
+  if (text == "bottom") return FileRows::FromBottom;
+  throw InvalidInputError(
+      "line rows must be 'top' (rows counted down from the top of the "
+      "upright texture) or 'bottom' (older files: h rows up), got '" +
+      text + "'");
+}
+
+void to_grid_rows(LineSet& lines, int n_h) {
+  if (n_h < 1) throw InvalidInputError("to_grid_rows: the texture needs at least one row");
+  for (AnimationLine& line : lines.lines)
+    for (Vector2d& p : line.pixels) p = texture_to_grid_pixel(p, n_h);
+  lines.texture_rows = n_h;
+}
+
+Vector2d file_pixel(const LineSet& lines, const Vector2d& grid_pixel) {
+  return lines.texture_rows > 0 ? texture_to_grid_pixel(grid_pixel, lines.texture_rows)
+                                : grid_pixel;
+}
+
+LineSet read_lines(const std::filesystem::path& path, int n_h, FileRows rows) {
+  LineSet set = read_lines_as_written(path);
+  if (rows == FileRows::FromTop) to_grid_rows(set, n_h);
+  return set;
 }
 
 Vector2d pixel_to_param(const ScanSurface& s, const Vector2d& px) {
@@ -537,7 +569,8 @@ void validate_lines(const LineSet& set, const ScanSurface& surface) {
     auto leaves_at = [&](const Vector2d& p) {
       std::ostringstream os;
       os.precision(1);
-      os << std::fixed << who << " leaves the scanned area at pixel (" << p.x() << ", " << p.y()
+      const Vector2d f = file_pixel(set, p);
+      os << std::fixed << who << " leaves the scanned area at pixel (" << f.x() << ", " << f.y()
          << ")";
       throw FileFormatError(set.file, os.str());
     };

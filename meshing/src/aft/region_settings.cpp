@@ -10,17 +10,12 @@
 
 #include "scanmesh/core/atomic_file.h"
 #include "scanmesh/core/errors.h"
+#include "scanmesh/core/texture_layout.h"
 #include "scanmesh/meshing/aft/regions.h"
 
 namespace scanmesh::aft {
 
 namespace {
-
-std::string short_mm(double v) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%g mm", v);
-  return buffer;
-}
 
 double number(const YAML::Node& n, const std::string& file, const std::string& key) {
   double v = 0;
@@ -182,14 +177,25 @@ RegionSettings parse_region_settings(std::string_view source, const std::string&
   // steps (a 0.05 mm unit on a head: minutes), which min_unit_mm exists to prevent.
   for (const RegionRule& rule : s.regions)
     if (rule.unit_mm && *rule.unit_mm < s.min_unit_mm)
-      throw FileFormatError(file, rule.name + ".unit_mm " + short_mm(*rule.unit_mm) +
-                                      " is below min_unit_mm " + short_mm(s.min_unit_mm));
+      throw FileFormatError(file, rule.name + ".unit_mm " + format_number(*rule.unit_mm) +
+                                      " mm is below min_unit_mm " + format_number(s.min_unit_mm) +
+                                      " mm");
   return s;
 }
 
-RegionSettings read_region_settings(const std::filesystem::path& path) {
+void to_grid_rows(RegionSettings& settings, int n_h) {
+  if (n_h < 1) throw InvalidInputError("to_grid_rows: the texture needs at least one row");
+  for (RegionRule& rule : settings.regions)
+    if (rule.point_px) rule.point_px = texture_to_grid_pixel(*rule.point_px, n_h);
+  settings.texture_rows = n_h;
+}
+
+RegionSettings read_region_settings(const std::filesystem::path& path, int n_h, FileRows rows) {
   const std::vector<std::uint8_t> bytes = read_file_bytes(path, kMaxConfigFileBytes);
-  return parse_region_settings(std::string(bytes.begin(), bytes.end()), path.string());
+  RegionSettings settings =
+      parse_region_settings(std::string(bytes.begin(), bytes.end()), path.string());
+  if (rows == FileRows::FromTop) to_grid_rows(settings, n_h);
+  return settings;
 }
 
 void apply_region_settings(RegionGraph& g, const RegionSettings& s, const ScanSurface& surface) {
@@ -201,8 +207,11 @@ void apply_region_settings(RegionGraph& g, const RegionSettings& s, const ScanSu
     const auto r = g.region_at(pixel_to_param(surface, *rule.point_px));
     if (!r) {
       std::ostringstream os;
-      os << "region setting '" << rule.name << "': point (" << rule.point_px->x() << ", "
-         << rule.point_px->y() << ") lies in no region";
+      const Eigen::Vector2d p = s.texture_rows > 0
+                                    ? texture_to_grid_pixel(*rule.point_px, s.texture_rows)
+                                    : *rule.point_px;
+      os << "region setting '" << rule.name << "': point (" << p.x() << ", " << p.y()
+         << ") lies in no region";
       throw InvalidInputError(os.str());
     }
     Region& reg = g.regions[*r];

@@ -351,7 +351,7 @@ RegionGraph analyze_regions(const LineSet& set, const ScanSurface& surface, doub
               // Touching at the shared vertex of a closed line's last and first pieces is not a
               // crossing; anything else is.
               std::ostringstream os;
-              const Vector2d x = p.a + t * r;
+              const Vector2d x = file_pixel(set, p.a + t * r);
               os.precision(1);
               os << std::fixed << who(l) << " intersects itself at pixel (" << wrap_x(x.x(), W)
                  << ", " << x.y() << ")";

@@ -39,9 +39,10 @@ struct SampleHead {
       sim::ScannerConfig::from_yaml_file(std::string(SCANMESH_SOURCE_DIR) +
                                          "/configs/sim/head-scanner-ideal.yaml"));
   ScanSurface surface{scan.grid};
-  LineSet lines = read_lines(std::string(SCANMESH_SOURCE_DIR) + "/configs/sim/head-lines.svg");
-  RegionSettings settings =
-      read_region_settings(std::string(SCANMESH_SOURCE_DIR) + "/configs/sim/head-regions.yaml");
+  LineSet lines =
+      read_lines(std::string(SCANMESH_SOURCE_DIR) + "/configs/sim/head-lines.svg", scan.grid.n_h());
+  RegionSettings settings = read_region_settings(
+      std::string(SCANMESH_SOURCE_DIR) + "/configs/sim/head-regions.yaml", scan.grid.n_h());
 };
 
 //! What every stitched animation mesh must be, checked from the region graph, independently

@@ -50,4 +50,7 @@ class DeviceError : public Error {
   std::string device_;
 };
 
+//! A number for a message: "%g" (six significant digits; 1e+300 instead of 301 digits).
+std::string format_number(double value);
+
 }  // namespace scanmesh

@@ -15,11 +15,16 @@ void export_pcd(const std::filesystem::path& path, const RangeGrid& grid);
 //! confidence (float), phi_index/h_index (int).
 void export_ply_points(const std::filesystem::path& path, const RangeGrid& grid);
 
-//! The RGB plane as an image: pixel (x, y) = cell (phi index, h index). Invalid cells keep
-//! their colour (the camera saw them even where the laser did not).
+//! The RGB plane as an upright picture (texture_layout.h): pixel (x, y) = cell (phi index x,
+//! h index n_h - 1 - y), the highest h at the top. Invalid cells keep their colour (the camera
+//! saw them even where the laser did not).
 Image8 texture_image(const RangeGrid& grid);
-//! A picture of the radius: grey, near the axis dark, far bright; invalid cells pure black.
+//! A picture of the radius in the same layout: grey, near the axis dark, far bright; invalid
+//! cells pure black.
 Image8 depth_image(const RangeGrid& grid);
+//! depth_image with a legend strip on the right: the grey scale with the smallest and largest
+//! radius in mm (what export_depth_png writes).
+Image8 depth_picture(const RangeGrid& grid);
 
 void export_texture_png(const std::filesystem::path& path, const RangeGrid& grid);
 void export_depth_png(const std::filesystem::path& path, const RangeGrid& grid);

@@ -17,6 +17,10 @@ inline constexpr std::uint64_t kMaxGridCells = 1ull << 26;
 //! Largest length a grid may hold (mm: |h0|, the top row's height, dh, a radius): 1 km. Beyond it
 //! a file is not a scan, and coordinates that large break every spacing-based grid downstream.
 inline constexpr double kMaxGridLengthMm = 1e6;
+//! Smallest dh and valid radius a grid may hold (mm): 1 picometre. Below it the cells of every
+//! column crowd one point of the axis (radii of 1e-30 made the fans and curvature run for
+//! seconds to produce nothing).
+inline constexpr double kMinGridLengthMm = 1e-9;
 
 //! Serialises every field of the grid (sizes, phi0, h0, dh, radius, validity, confidence,
 //! colour, metadata) and appends a CRC-32 of all preceding bytes.

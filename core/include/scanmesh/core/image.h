@@ -28,6 +28,9 @@ struct Image8 {
   Rgb8 rgb(int x, int y) const;
 };
 
+//! Turns the image upside down (row 0 becomes the last row).
+void flip_rows(Image8& image);
+
 //! Writes an 8-bit PNG atomically. Throws IoError on failure.
 void write_png(const std::filesystem::path& path, const Image8& image);
 //! Reads an 8-bit grey/RGB/RGBA PNG (16-bit and palette images are converted to 8-bit).

@@ -19,8 +19,10 @@ struct RenderOptions {
   double margin = 0.06;  //!< fraction of the image kept free around the object
 };
 
-//! Renders the mesh. Back faces are shown darker and blue-tinted so holes and flipped
-//! triangles are visible. Throws InvalidInputError for sizes outside 16..8192.
+//! Renders the mesh. Back faces are drawn in one dark slate blue whatever their colour, so holes
+//! and flipped triangles show as such and never as a tint of the surface. A mesh without
+//! triangles (a point cloud) is drawn as round splats. Throws InvalidInputError for sizes
+//! outside 16..8192.
 Image8 render_mesh(const Mesh& mesh, const RenderOptions& options = {});
 
 //! Places images side by side (same height expected; shorter ones are padded).

@@ -1,10 +1,13 @@
-// Pictures of curvature and normals: what people would rather look at than read.
+// Pictures of curvature and normals: what people would rather look at than read. Values are
+// per cell (k = j * width + i); the pictures are upright (core/texture_layout.h: the highest h
+// at the top).
 #pragma once
 
 #include <string>
 #include <vector>
 
 #include "scanmesh/core/image.h"
+#include "scanmesh/core/image_text.h"  // draw_text, used with these maps
 #include "scanmesh/reconstruction/surface_fields.h"
 
 namespace scanmesh {
@@ -22,8 +25,5 @@ Image8 diverging_map(const std::vector<float>& values, const std::vector<std::ui
 
 //! Normal map: RGB = (n + 1) / 2 in the turntable frame, undefined cells black.
 Image8 normal_map(const SurfaceFields& fields);
-
-//! Draws text with the built-in 5 x 7 pixel font (digits, letters, . - + [ ] / = space).
-void draw_text(Image8& image, int x, int y, const std::string& text, Rgb8 color, int scale = 1);
 
 }  // namespace scanmesh

@@ -2,12 +2,13 @@
 // partition the surface into regions, become mandatory edge chains of the mesh, and mark
 // openings (eyes, mouth: the region inside stays empty) and seams (borders to another mesh).
 //
-// Input: an SVG drawn over the texture PNG (coordinates = texture pixels: x = phi column,
-// y = h row, row 0 at the image top = the lowest h) or the same lines as JSON
-// (docs/formats.md, "Animation lines"). Bezier curves are flattened to 24 pieces per curve
-// segment; a polyline marked smooth becomes the centripetal Catmull-Rom spline through its
-// points (line_curve). That curve is the exact geometry every later step (intersections, arc
-// length) uses.
+// Input: an SVG drawn over the upright texture PNG (coordinates = texture pixels: x = phi
+// column, y down from the picture's top edge, where the highest h is; core/texture_layout.h) or
+// the same lines as JSON (docs/formats.md, "Animation lines"). read_lines brings them into the
+// grid pixel frame (y = h rows up from the lowest h), in which everything below works. Bezier
+// curves are flattened to 24 pieces per curve segment; a polyline marked smooth becomes the
+// centripetal Catmull-Rom spline through its points (line_curve). That curve is the exact geometry
+// every later step (intersections, arc length) uses.
 #pragma once
 
 #include <Eigen/Core>
@@ -40,7 +41,21 @@ struct AnimationLine {
 struct LineSet {
   std::string file;
   std::vector<AnimationLine> lines;
+  //! > 0: the lines came from a file counting rows down from the top of a picture this many
+  //! rows high and were turned into the grid pixel frame (to_grid_rows); messages convert back
+  //! to the file's coordinates (file_pixel). 0: the coordinates are the grid pixel frame's.
+  int texture_rows = 0;
 };
+
+//! How the y coordinates of a line or region-settings file count (docs/animation-meshes.md,
+//! "Coordinates").
+enum class FileRows {
+  FromTop,     //!< rows down from the top of the upright texture.png: the convention
+  FromBottom,  //!< h rows up from the lowest h: files written before pictures were upright
+};
+
+//! Parses "top" / "bottom" (the CLI's --line-rows); InvalidInputError otherwise.
+FileRows parse_file_rows(const std::string& text);
 
 //! Parses SVG text: <path d="..."> (M L H V C S Q T Z, absolute and relative), <polyline>,
 //! <polygon>, <line>. A path with several subpaths gives one line per subpath. id or class
@@ -61,10 +76,20 @@ LineSet parse_lines_json(std::string_view text, const std::string& file);
 //! round the axis continues one turn on).
 std::vector<Eigen::Vector2d> line_curve(const AnimationLine& line, double width_px);
 
-//! Reads .svg or .json by extension (IoError if unreadable).
-LineSet read_lines(const std::filesystem::path& path);
+//! Reads .svg or .json by extension (IoError if unreadable) drawn over a texture `n_h` rows high
+//! (the grid's n_h), and brings the coordinates into the grid pixel frame (to_grid_rows) unless
+//! the file counts rows from the bottom.
+LineSet read_lines(const std::filesystem::path& path, int n_h, FileRows rows = FileRows::FromTop);
 
-//! Texture pixel (x, y) -> (phi, h): pixel i covers [i, i + 1), cell i sits at its centre.
+//! Texture-pixel coordinates counted down from the top of a picture `n_h` rows high -> the grid
+//! pixel frame (y up from the lowest h), for every point of every line. The parse_* functions
+//! return the file's coordinates as they are.
+void to_grid_rows(LineSet& lines, int n_h);
+
+//! A point of the set in the coordinates its file gave (for messages).
+Eigen::Vector2d file_pixel(const LineSet& lines, const Eigen::Vector2d& grid_pixel);
+
+//! Grid pixel (x, y) -> (phi, h): pixel i covers [i, i + 1), cell i sits at its centre.
 Eigen::Vector2d pixel_to_param(const ScanSurface& surface, const Eigen::Vector2d& pixel);
 Eigen::Vector2d param_to_pixel(const ScanSurface& surface, const Eigen::Vector2d& param);
 

@@ -95,7 +95,7 @@ RegionGraph analyze_regions(const LineSet& lines, const ScanSurface& surface, do
 
 struct RegionRule {
   std::string name;
-  std::optional<Eigen::Vector2d> point_px;  //!< texture pixel inside the region
+  std::optional<Eigen::Vector2d> point_px;  //!< pixel inside the region (see texture_rows)
   std::optional<double> unit_mm;
   std::optional<std::string> mesher;
 };
@@ -142,6 +142,9 @@ struct RegionSettings {
   //! set here (the CLI's --data-border, else auto).
   std::optional<DataBorderMode> data_border;
   std::vector<RegionRule> regions;
+  //! As LineSet::texture_rows: > 0 when the rules' points were turned from a file's
+  //! top-down rows into the grid pixel frame (to_grid_rows); messages give the file's values.
+  int texture_rows = 0;
 
   //! The same settings with every unit size (the default and each rule's) times `factor`, e.g.
   //! 0.25 for a mesh four times finer; the adaptive lower bound min_unit_mm is kept.
@@ -150,8 +153,13 @@ struct RegionSettings {
 
 //! YAML (or JSON, a subset of YAML) region settings (docs/formats.md, "Region settings").
 //! Throws FileFormatError naming the file for unknown keys, wrong types or impossible values.
+//! parse_region_settings keeps the points as written; read_region_settings brings them into the
+//! grid pixel frame for a texture `n_h` rows high unless the file counts rows from the bottom.
 RegionSettings parse_region_settings(std::string_view text, const std::string& file);
-RegionSettings read_region_settings(const std::filesystem::path& path);
+RegionSettings read_region_settings(const std::filesystem::path& path, int n_h,
+                                    FileRows rows = FileRows::FromTop);
+//! The rules' points from top-down texture rows into the grid pixel frame (as for lines).
+void to_grid_rows(RegionSettings& settings, int n_h);
 
 //! Applies the settings' rules to the graph's regions (names, unit sizes, meshers). A rule whose
 //! point lies in no region throws InvalidInputError naming the rule.

@@ -99,6 +99,7 @@ struct PrepareStats {
   std::size_t components_removed = 0, faces_removed = 0, holes_filled = 0, faces_added = 0;
   std::size_t degenerate_removed = 0, needles_welded = 0, caps_flipped = 0, caps_removed = 0;
   std::size_t spike_faces_removed = 0, pinch_faces_removed = 0, tip_faces_removed = 0;
+  std::size_t repeated_faces_removed = 0;  //!< copies of an earlier face's corners (always)
 };
 //! Returns the cleaned mesh (labels kept; a hole's fan takes the label of its rim faces).
 Mesh prepare_input(const Mesh& input, const PrepareOptions& options, PrepareStats* stats = nullptr);
