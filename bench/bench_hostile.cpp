@@ -122,6 +122,42 @@ std::vector<Case> cases() {
          return std::vector<std::string>{"fans", (d / "dup.xyz").string(), "--out",
                                          (d / "dup.ply").string()};
        }},
+      {"fans: sheet + 3 % outliers to 1e308", 40000,
+       [](std::size_t n, const fs::path& d) {
+         std::string s;
+         const int side = static_cast<int>(std::sqrt(static_cast<double>(n)));
+         for (int i = 0; i < side; ++i)
+           for (int j = 0; j < side; ++j)
+             s += std::to_string(i + 0.3 * std::sin(j)) + " " + std::to_string(j) + " 0\n";
+         std::uint64_t state = 7;
+         auto uniform = [&state] {
+           state = state * 6364136223846793005ull + 1442695040888963407ull;
+           return static_cast<double>(state >> 11) / 9007199254740992.0;
+         };
+         char line[96];
+         for (std::size_t k = 0; k < n / 32; ++k) {
+           double c[3];
+           for (double& v : c) v = (uniform() < 0.5 ? -1 : 1) * std::pow(10.0, 308.0 * uniform());
+           std::snprintf(line, sizeof line, "%.17g %.17g %.17g\n", c[0], c[1], c[2]);
+           s += line;
+         }
+         write_text(d / "scatter.xyz", s);
+         return std::vector<std::string>{"fans", (d / "scatter.xyz").string(), "--out",
+                                         (d / "scatter.ply").string()};
+       }},
+      {"render: fan of n slivers", 125000,
+       [](std::size_t n, const fs::path& d) {
+         std::string s = ply_header(n + 1, n) + "0 0 0\n";
+         for (std::size_t i = 0; i < n; ++i)
+           s += std::to_string(100 * std::cos(6.283185307 * i / n)) + " " +
+                std::to_string(100 * std::sin(6.283185307 * i / n)) + " 0\n";
+         for (std::size_t i = 0; i < n; ++i)
+           s += "3 0 " + std::to_string(1 + i) + " " + std::to_string(1 + (i + 1) % n) + "\n";
+         write_text(d / "slivers.ply", s);
+         return std::vector<std::string>{"render",      (d / "slivers.ply").string(),
+                                         "--out",       (d / "slivers.png").string(),
+                                         "--elevation", "90"};
+       }},
       {"fans: sheet + outlier at 1e20", 40000,
        [](std::size_t n, const fs::path& d) {
          std::string s;

@@ -326,8 +326,11 @@ SessionManifest read_session_manifest(const fs::path& folder) {
   if (!fs::exists(folder / "session.json"))
     throw FileFormatError(folder, "not a session folder (no session.json)");
   const auto header = read_file_bytes(folder / "session.json");
-  std::vector<std::uint8_t> steps;
-  if (fs::exists(folder / "steps.jsonl")) steps = read_file_bytes(folder / "steps.jsonl");
+  // A session is created with steps.jsonl before session.json, so one without it is damaged.
+  if (!fs::exists(folder / "steps.jsonl"))
+    throw FileFormatError(folder / "steps.jsonl",
+                          "missing: the session's step journal is gone (damaged session)");
+  const std::vector<std::uint8_t> steps = read_file_bytes(folder / "steps.jsonl");
   return parse_session_manifest(
       std::string_view(reinterpret_cast<const char*>(header.data()), header.size()),
       std::string_view(reinterpret_cast<const char*>(steps.data()), steps.size()), folder);

@@ -21,12 +21,6 @@ namespace scanmesh {
 namespace {
 
 // A length for a message: "%g", never std::to_string's 309 digits of 1e308.
-std::string short_length(double v) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%g", v);
-  return buffer;
-}
-
 // "SCANMESHGRID" then CR LF SUB LF (the PNG trick): a text-mode transfer that rewrites line ends
 // or stops at ^Z mangles these four bytes and the magic check fails straight away.
 constexpr std::array<std::uint8_t, 16> kMagic = {'S', 'C', 'A', 'N', 'M',  'E',  'S',  'H',
@@ -124,10 +118,12 @@ RangeGrid decode_grid(std::span<const std::uint8_t> bytes, const std::filesystem
   const double phi0 = read_le_f64(p + 32), h0 = read_le_f64(p + 40), dh = read_le_f64(p + 48);
   if (!std::isfinite(phi0) || !std::isfinite(h0)) fail("phi0/h0 are not finite");
   if (!std::isfinite(dh) || !(dh > 0.0))
-    fail("height step dh = " + short_length(dh) + " is not positive");
+    fail("height step dh = " + format_number(dh) + " is not positive");
+  if (dh < kMinGridLengthMm)
+    fail("height step dh = " + format_number(dh) + " mm is below 1e-9 mm: not a scan");
   if (std::abs(h0) > kMaxGridLengthMm || std::abs(h0 + dh * n_h) > kMaxGridLengthMm)
-    fail("rows span heights beyond 1e6 mm (h0 " + short_length(h0) + " mm, dh " +
-         short_length(dh) + " mm): not a scan");
+    fail("rows span heights beyond 1e6 mm (h0 " + format_number(h0) + " mm, dh " +
+         format_number(dh) + " mm): not a scan");
 
   // 6. Metadata, every length checked against the end of the header.
   std::map<std::string, std::string> metadata;
@@ -168,9 +164,9 @@ RangeGrid decode_grid(std::span<const std::uint8_t> bytes, const std::filesystem
     const float c = read_le_f32(confidence_plane + 4 * k);
     if (v > 1)
       fail(cell_name(k, n_phi) + ": validity byte " + std::to_string(v) + " is not 0 or 1");
-    if (v == 1 && (!std::isfinite(r) || !(r > 0.0f) || r > kMaxGridLengthMm))
-      fail(cell_name(k, n_phi) + ": valid cell has radius " + short_length(r) +
-           " (must be finite, > 0 and at most 1e6 mm)");
+    if (v == 1 && (!std::isfinite(r) || !(r >= kMinGridLengthMm) || r > kMaxGridLengthMm))
+      fail(cell_name(k, n_phi) + ": valid cell has radius " + format_number(r) +
+           " (must be finite, at least 1e-9 and at most 1e6 mm)");
     if (v == 0 && r != 0.0f)
       fail(cell_name(k, n_phi) + ": invalid cell has radius " + std::to_string(r) + " (must be 0)");
     if (!std::isfinite(c) || c < 0.0f || c > 1.0f)
@@ -203,6 +199,10 @@ RangeGrid read_grid(const std::filesystem::path& path) {
 }
 
 bool looks_like_grid_file(const std::filesystem::path& path) {
+  // Only a regular file is opened: a FIFO would block the open until a writer came (`info` on a
+  // FIFO hung); the readers then refuse anything else with a message.
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return false;
   std::ifstream in(path, std::ios::binary);
   std::array<char, kMagic.size()> head{};
   if (!in.read(head.data(), head.size())) return false;

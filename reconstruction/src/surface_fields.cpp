@@ -54,10 +54,16 @@ void gather_neighbours(const RangeGrid& grid, const std::vector<Eigen::Vector3d>
                static_cast<int>(std::ceil(radius_mm / (std::max(r, 1e-6) * grid.dphi()))) + 1);
   const double r2 = radius_mm * radius_mm;
   const auto& valid = grid.validity();
-  for (int dj = -dj_max; dj <= dj_max; ++dj) {
+  // A window wider than 2 * kMaxHalfWindow + 1 cells is sampled every `step`-th row and column:
+  // a quadric through ~2,400 evenly spread cells is as good as through all of them, and a large
+  // --radius (40 mm on a 0.45 mm grid: 30,000 cells per fit, 262,144 fits) ran for minutes.
+  constexpr int kMaxHalfWindow = 24;
+  const int step = std::max(1, (std::max(dj_max, di_max) + kMaxHalfWindow - 1) / kMaxHalfWindow);
+  // Multiples of the step: the sampled window stays centred on the cell.
+  for (int dj = -(dj_max / step) * step; dj <= dj_max; dj += step) {
     const int jj = j + dj;
     if (jj < 0 || jj >= grid.n_h()) continue;
-    for (int di = -di_max; di <= di_max; ++di) {
+    for (int di = -(di_max / step) * step; di <= di_max; di += step) {
       const std::size_t k = grid.index(grid.wrap_phi(i + di), jj);
       if (valid[k] && (positions[k] - centre).squaredNorm() <= r2) out.push_back(positions[k]);
     }

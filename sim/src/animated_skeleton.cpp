@@ -1,5 +1,6 @@
 // Keyframed skeletal implicit surfaces (docs/formats.md, "Animated skeleton scenes").
 #include "scanmesh/sim/animated_skeleton.h"
+#include "scanmesh/sim/scene.h"
 
 #include <algorithm>
 #include <fstream>
@@ -31,6 +32,9 @@ AnimatedSkeleton AnimatedSkeleton::from_yaml_text(const std::string& text,
   if (root["iso"]) s.iso = rd.positive(root["iso"], "iso");
   const YAML::Node list = rd.required(root, "elements", "scene");
   if (!list.IsSequence() || list.size() == 0) rd.fail(list, "'elements' must be a non-empty list");
+  if (list.size() > Scene::kMaxElements)
+    rd.fail(list, "an animated skeleton holds at most " + std::to_string(Scene::kMaxElements) +
+                      " elements, this one " + std::to_string(list.size()));
   for (std::size_t k = 0; k < list.size(); ++k) {
     const YAML::Node e = list[k];
     const std::string who = "element " + std::to_string(k);

@@ -47,9 +47,10 @@ void ScannerConfig::validate() const {
   // below 1 GB, the 64 M a grid file may hold would take over 10 GB.
   check(static_cast<long long>(n_phi) * n_h <= kMaxSimulatedCells,
         "n_phi x n_h must be at most " + std::to_string(kMaxSimulatedCells) + " cells (e.g. 2048 x 2048)");
-  check(std::isfinite(radius_mm) && radius_mm > 0.0, "radius_mm must be positive");
+  check(std::isfinite(radius_mm) && radius_mm >= kMinGridLengthMm,
+        "radius_mm must be at least 1e-9 mm");
   check(std::isfinite(h0_mm), "h0_mm must be finite");
-  check(std::isfinite(dh_mm) && dh_mm > 0.0, "dh_mm must be positive");
+  check(std::isfinite(dh_mm) && dh_mm >= kMinGridLengthMm, "dh_mm must be at least 1e-9 mm");
   check(radius_mm <= kMaxGridLengthMm && std::abs(h0_mm) <= kMaxGridLengthMm &&
             std::abs(h0_mm + dh_mm * n_h) <= kMaxGridLengthMm,
         "radius_mm and the rows' heights (h0_mm + n_h * dh_mm) must stay within 1e6 mm");

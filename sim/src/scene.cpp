@@ -57,6 +57,10 @@ std::shared_ptr<const SceneObject> parse_skeletal(const YamlReader& rd, const YA
   const YAML::Node list = rd.required(node, "elements", where);
   if (!list.IsSequence() || list.size() == 0)
     rd.fail(list, where + ": 'elements' must be a non-empty list");
+  if (list.size() > Scene::kMaxElements)
+    rd.fail(list, where + ": a skeletal object holds at most " +
+                      std::to_string(Scene::kMaxElements) + " elements, this one " +
+                      std::to_string(list.size()));
   std::vector<SkeletonElement> elements;
   for (std::size_t k = 0; k < list.size(); ++k) {
     const YAML::Node e = list[k];
@@ -160,6 +164,9 @@ void parse_texture(const YamlReader& rd, const YAML::Node& node, Scene& scene) {
     scene.base_color = parse_color(rd, node["base_color"], "texture base_color");
   if (const YAML::Node list = node["paints"]) {
     if (!list.IsSequence()) rd.fail(list, "texture paints must be a list");
+    if (list.size() > Scene::kMaxPaints)
+      rd.fail(list, "a texture holds at most " + std::to_string(Scene::kMaxPaints) +
+                        " paints, this one " + std::to_string(list.size()));
     for (std::size_t k = 0; k < list.size(); ++k) {
       const YAML::Node p = list[k];
       std::string who = "paint " + std::to_string(k);

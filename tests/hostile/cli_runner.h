@@ -31,8 +31,11 @@ struct RunResult {
   std::string output;  // stdout and stderr together
 };
 
-//! Runs `scanmesh args...`. `max_file_bytes` >= 0 limits every file the child writes.
-inline RunResult run_cli(const std::vector<std::string>& args, long long max_file_bytes = -1) {
+//! Runs `scanmesh args...`. `max_file_bytes` >= 0 limits every file the child writes; with
+//! `ignore_sigxfsz` false the child keeps SIGXFSZ's default action, as a shell's `ulimit -f`
+//! leaves it (the binary must then ignore it itself).
+inline RunResult run_cli(const std::vector<std::string>& args, long long max_file_bytes = -1,
+                         bool ignore_sigxfsz = true) {
   // Everything that allocates happens before fork (the test process may have threads).
   std::vector<std::string> storage{kBinary.string()};
   storage.insert(storage.end(), args.begin(), args.end());
@@ -53,7 +56,8 @@ inline RunResult run_cli(const std::vector<std::string>& args, long long max_fil
     if (max_file_bytes >= 0) {
       const rlimit limit{static_cast<rlim_t>(max_file_bytes), static_cast<rlim_t>(max_file_bytes)};
       setrlimit(RLIMIT_FSIZE, &limit);
-      signal(SIGXFSZ, SIG_IGN);  // inherited across exec: writes fail with EFBIG instead
+      // Inherited across exec: writes fail with EFBIG instead of killing the process.
+      signal(SIGXFSZ, ignore_sigxfsz ? SIG_IGN : SIG_DFL);
     }
     alarm(240);  // a hang is a failure (SIGALRM), not a stuck suite; far above any normal run
     execv(argv[0], argv.data());

@@ -5,6 +5,7 @@
 // bench/bench_hostile, not here: these tests only check the outcome.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
+#include <sys/types.h>
 
 #include <cmath>
 #include <cstdint>
@@ -459,6 +460,212 @@ TEST_F(HostileRoundTwo, ResumeCapturesDamagedAndMissingFramesAgain) {
   EXPECT_EQ(linked.exit_code, 4) << linked.output;
   EXPECT_TRUE(contains(linked.output, frames[4].filename().string())) << linked.output;
   EXPECT_FALSE(fs::exists(path("rp2")));
+}
+
+// --- variants found by re-testing round two (5 Dec 2026): the same kinds of input, further ----
+
+TEST_F(HostileRoundTwo, MoreThanOnePercentOfFarOutliersAreMeshedAround) {
+  // 3 % of the points scattered up to 1e308 (more than the 1 % quantile box left out): the
+  // box grew to 1e154, the cell edge overflowed to infinity and a NaN cell index crashed the
+  // neighbour search; with 1e30 the fans ran 8 s and left a few hundred triangles.
+  std::vector<std::array<double, 3>> pts = sheet_points();
+  const std::size_t sheet = pts.size();
+  std::uint64_t state = 17;
+  auto uniform = [&state] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(state >> 11) / 9007199254740992.0;
+  };
+  for (int k = 0; k < 30; ++k) {
+    std::array<double, 3> p{};
+    for (double& c : p) c = (uniform() < 0.5 ? -1 : 1) * std::pow(10.0, 308.0 * uniform());
+    pts.push_back(p);
+  }
+  write_text(path("scatter.xyz"), xyz_text(pts));
+  write_text(path("sheet.xyz"), xyz_text(std::vector(pts.begin(), pts.begin() + sheet)));
+  nlohmann::json counts;
+  for (const char* name : {"sheet.xyz", "scatter.xyz"}) {
+    const std::vector<std::string> args{"fans", path(name).string(), "--out",
+                                        path(std::string(name) + ".ply").string(), "--json"};
+    const RunResult r = run_cli(args);
+    ASSERT_EQ(r.exit_code, 0) << describe(args, r);
+    counts[name] = nlohmann::json::parse(r.output.substr(r.output.find('{')))["triangles"];
+  }
+  EXPECT_EQ(counts["scatter.xyz"], counts["sheet.xyz"]) << counts.dump();
+}
+
+TEST_F(HostileRoundTwo, AClusterFarDenserThanTheCloudIsRefusedNotMeshedForMinutes) {
+  // 5,000 points within 1e-9 of one point beside a 10,000-point sheet (not exact copies, which
+  // are meshed once): every neighbour query in that one cell was O(5,000).
+  std::vector<std::array<double, 3>> pts;
+  for (int i = 0; i < 100; ++i)
+    for (int j = 0; j < 100; ++j)
+      pts.push_back({i + 0.3 * std::sin(j), j + 0.2 * std::cos(i), 0.5 * std::sin(0.3 * i)});
+  for (int k = 0; k < 5000; ++k)
+    pts.push_back(
+        {10 + 1e-9 * std::sin(k), 10 + 1e-9 * std::cos(3.0 * k), 1e-9 * std::sin(7.0 * k)});
+  write_text(path("cluster.xyz"), xyz_text(pts));
+  const std::vector<std::string> args{"fans", path("cluster.xyz").string(), "--out",
+                                      path("cluster.ply").string()};
+  const RunResult r = run_cli(args);
+  EXPECT_EQ(r.exit_code, 3) << describe(args, r);
+  EXPECT_TRUE(contains(r.output, "cluster.xyz")) << r.output;
+  EXPECT_TRUE(contains(r.output, "one grid cell")) << r.output;
+  EXPECT_FALSE(fs::exists(path("cluster.ply")));
+}
+
+TEST_F(HostileRoundTwo, InfoOnAFifoIsRefusedNotWaitedOn) {
+  for (const char* name : {"fifo.smg", "fifo.ply"}) {
+    ASSERT_EQ(mkfifo(path(name).c_str(), 0600), 0);
+    const std::vector<std::string> args{"info", path(name).string()};
+    const RunResult r = run_cli(args);  // hung until a writer came
+    EXPECT_EQ(r.exit_code, 4) << describe(args, r);
+    EXPECT_TRUE(contains(r.output, "not a regular file")) << r.output;
+  }
+}
+
+TEST_F(HostileRoundTwo, AFileSizeLimitEndsWithExitFiveAndNoFileNotWithSigxfsz) {
+  // `ulimit -f` leaves SIGXFSZ at its default (kill): the binary ignores it itself, so the write
+  // fails with EFBIG and the outputs are taken back (exit 153 left a texture and a temporary).
+  const fs::path folder = scratch_dir("round_two_fsize");
+  const std::vector<std::string> args{"grid-mesh", path("good.smg").string(), "--obj",
+                                      (folder / "m.obj").string()};
+  const RunResult r = run_cli(args, 20000, /*ignore_sigxfsz=*/false);
+  EXPECT_EQ(r.exit_code, 5) << describe(args, r);
+  EXPECT_TRUE(files_in(folder).empty()) << "left behind: " << files_in(folder).size();
+  fs::remove_all(folder);
+}
+
+TEST_F(HostileRoundTwo, UnitSizesThatAskForMillionsOfTrianglesAreRefusedBeforeTheWork) {
+  // The settings may lower min_unit_mm; a unit far below the grid's resolution then ran for
+  // minutes and past 1 GB. The estimated triangle count is bounded instead.
+  const fs::path settings = path("fine.yaml");
+  write_text(settings, "unit_mm: 0.05\nmin_unit_mm: 0.01\n");
+  write_text(path("ring.json"),
+             R"({"lines": [{"id": "ring", "closed": true,
+                 "points": [[4, 5], [20, 5], [20, 11], [4, 11]]}]})");
+  const std::vector<std::string> args{
+      "animesh",    path("good.smg").string(), "--lines", path("ring.json").string(),
+      "--settings", settings.string(),         "--out",   path("fine_out").string()};
+  const RunResult r = run_cli(args);
+  EXPECT_EQ(r.exit_code, 3) << describe(args, r);
+  EXPECT_TRUE(contains(r.output, "raise unit_mm")) << r.output;
+  EXPECT_FALSE(fs::exists(path("fine_out")));
+}
+
+TEST_F(HostileRoundTwo, AnimeshOutputOntoAFileFailsBeforeReadingTheLines) {
+  // The folder is made first: a bad --out is found before the lines (here malformed) are read.
+  write_text(path("not_a_folder"), "x");
+  write_text(path("bad_lines.svg"), "<svg><path d='M 1'/></svg>");
+  const std::vector<std::string> args{"animesh", path("good.smg").string(),
+                                      "--lines", path("bad_lines.svg").string(),
+                                      "--out",   path("not_a_folder").string()};
+  const RunResult r = run_cli(args);
+  EXPECT_EQ(r.exit_code, 5) << describe(args, r);
+  EXPECT_EQ(read_text(path("not_a_folder")), "x");
+}
+
+TEST_F(HostileRoundTwo, ScenesWithTooManyElementsOrBytesAreRefusedBeforeParsing) {
+  // One skeletal object of 300 elements (every field evaluation sums over all of them) and a
+  // scene over the 2 MiB configuration limit given to `particles`, which parsed it whole first.
+  std::string skeletal = "objects:\n  - type: skeletal\n    elements:\n";
+  for (int k = 0; k < 300; ++k)
+    skeletal += "      - {type: point, center: [" + std::to_string(k) + ", 0, 0], radius: 5}\n";
+  write_text(path("many_elements.yaml"), skeletal);
+  RunResult r = run_cli(
+      {"sim", "--scene", path("many_elements.yaml").string(), "--out", path("me.smg").string()});
+  EXPECT_EQ(r.exit_code, 4) << r.output;
+  EXPECT_TRUE(contains(r.output, "at most 256 elements")) << r.output;
+  std::string big = "objects:\n";
+  while (big.size() < (std::size_t{3} << 20)) big += "# padding padding padding padding padding\n";
+  write_text(path("big_scene.yaml"), big);
+  r = run_cli({"particles", path("big_scene.yaml").string(), "--edge", "5", "--out",
+               path("big_out").string()});
+  EXPECT_EQ(r.exit_code, 4) << r.output;
+  EXPECT_TRUE(contains(r.output, "big_scene.yaml")) << r.output;
+  EXPECT_FALSE(fs::exists(path("big_out")));
+}
+
+TEST_F(HostileRoundTwo, GridLengthsBelowAPicometreAreABadFile) {
+  // Radii of 1e-30 mm put every cell on the axis: fans and curvature ran for seconds and made
+  // nothing. The reader now refuses them like lengths beyond 1e6 mm.
+  RangeGrid tiny = read_grid(path("good.smg"));
+  for (int j = 0; j < tiny.n_h(); ++j)
+    for (int i = 0; i < tiny.n_phi(); ++i)
+      if (tiny.valid(i, j)) tiny.set_sample(i, j, 1e-30f, tiny.confidence(i, j));
+  write_grid(path("tiny.smg"), tiny);
+  for (const char* command : {"info", "fans", "curvature"}) {
+    std::vector<std::string> args{command, path("tiny.smg").string()};
+    if (std::string(command) != "info")
+      args.insert(args.end(), {"--out", path("tiny_out").string()});
+    const RunResult r = run_cli(args);
+    EXPECT_EQ(r.exit_code, 4) << describe(args, r);
+    EXPECT_TRUE(contains(r.output, "tiny.smg")) << r.output;
+  }
+}
+
+TEST_F(HostileRoundTwo, RemeshDropsCopiesOfAFaceInsteadOfPolishingThem) {
+  // Ten copies of one triangle (an STL's repeated facet): the remesher kept them as stacked
+  // seams and its polish ran for half a minute; the copies are dropped before the work.
+  std::string stl = "solid copies\n";
+  for (int k = 0; k < 10; ++k)
+    stl +=
+        "facet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 100 0 0\nvertex 0 100 0\n"
+        "endloop\nendfacet\n";
+  stl += "endsolid copies\n";
+  write_text(path("copies.stl"), stl);
+  const std::vector<std::string> args{"remesh", path("copies.stl").string(), "--vertices", "100",
+                                      "--out",  path("copies_out").string(), "--json"};
+  const RunResult r = run_cli(args);
+  ASSERT_EQ(r.exit_code, 0) << describe(args, r);
+  const auto j = nlohmann::json::parse(r.output.substr(r.output.find('{')));
+  EXPECT_EQ(j["prepare"]["repeated_faces_removed"], 9) << j.dump();
+  EXPECT_NEAR(j["stats"]["output_vertices"].get<double>(), 100, 1);
+}
+
+TEST_F(HostileRoundTwo, ACalibrationSessionWithoutItsStepsIsABadFile) {
+  // Its step journal missing or empty: exit 3 ("no views") on two lines before; a damaged
+  // session is a bad file (exit 4) naming the file.
+  const fs::path session = path("calibration_session");
+  const std::vector<std::string> scan{"scan",   "--sim",   "--calibration",
+                                      "--size", "160x120", "--time-scale",
+                                      "0.01",   "--out",   session.string()};
+  ASSERT_EQ(run_cli(scan).exit_code, 0);
+  write_text(session / "steps.jsonl", "");
+  const std::vector<std::string> calibrate{"calibrate", session.string(), "--out",
+                                           path("c.yaml").string()};
+  RunResult r = run_cli(calibrate);
+  EXPECT_EQ(r.exit_code, 4) << describe(calibrate, r);
+  EXPECT_TRUE(contains(r.output, "steps.jsonl")) << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  fs::remove(session / "steps.jsonl");
+  r = run_cli(calibrate);
+  EXPECT_EQ(r.exit_code, 4) << describe(calibrate, r);
+  EXPECT_TRUE(contains(r.output, "steps.jsonl")) << r.output;
+  EXPECT_FALSE(fs::exists(path("c.yaml")));
+}
+
+TEST_F(HostileRoundTwo, ACalibrationForOtherFrameSizesIsRefusedNamingBothSizes) {
+  // A 640 x 480 calibration on 160 x 120 frames ran, with every ray wrong.
+  write_text(path("cal640.yaml"),
+             "format: scanmesh-calibration\nversion: 1\nimage: {width: 640, height: 480}\n"
+             "intrinsics: {fx: 700, fy: 700, cx: 320, cy: 240}\n"
+             "distortion: {k1: 0, k2: 0, p1: 0, p2: 0, k3: 0}\n"
+             "axis: {direction: [0, -1, 0], origin_mm: [0, 50, 400]}\n"
+             "lasers:\n  - {name: left, normal: [1, 0, 0], distance_mm: 10}\n"
+             "  - {name: right, normal: [-1, 0, 0], distance_mm: 10}\n");
+  const fs::path session = path("small_frames");
+  ASSERT_EQ(run_cli({"scan", "--sim", "--steps", "4", "--size", "160x120", "--time-scale", "0.01",
+                     "--out", session.string()})
+                .exit_code,
+            0);
+  const std::vector<std::string> args{"reconstruct", session.string(),
+                                      "--calib",     path("cal640.yaml").string(),
+                                      "--out",       path("wrong.smg").string()};
+  const RunResult r = run_cli(args);
+  EXPECT_EQ(r.exit_code, 3) << describe(args, r);
+  EXPECT_TRUE(contains(r.output, "640x480")) << r.output;
+  EXPECT_TRUE(contains(r.output, "160x120")) << r.output;
+  EXPECT_FALSE(fs::exists(path("wrong.smg")));
 }
 
 }  // namespace

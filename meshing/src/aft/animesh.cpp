@@ -489,6 +489,34 @@ StitchDefects stitch_defects(const std::vector<std::array<int, 3>>& tris,
   return d;
 }
 
+// Limit (docs/animation-meshes.md, "Limits"): the regions' unit sizes decide the mesh's size,
+// and a unit far below the scan's resolution (a region at 0.05 mm on a 0.45 mm grid, allowed by
+// lowering min_unit_mm in the same file) ran for minutes and past 1 GB. Each region's surface
+// area (its (phi, h) area times the radius at its label point) over an equilateral triangle of
+// side unit_mm estimates its triangles; more than this in all is refused before any work.
+constexpr double kMaxEstimatedTriangles = 5e5;
+
+void check_triangle_budget(const RegionGraph& g, const ScanSurface& surface) {
+  double total = 0, largest = 0;
+  std::string largest_name;
+  double largest_unit = 0;
+  for (const Region& r : g.regions) {
+    if (r.opening || !(r.unit_mm > 0)) continue;
+    const auto radius = surface.radius_value(r.label_point.x(), r.label_point.y());
+    const double area_mm2 = std::abs(r.area) * (radius ? *radius : 0.0);
+    const double triangles = area_mm2 / (std::sqrt(3.0) / 4.0 * r.unit_mm * r.unit_mm);
+    total += triangles;
+    if (triangles > largest) largest = triangles, largest_name = r.name, largest_unit = r.unit_mm;
+  }
+  if (total <= kMaxEstimatedTriangles) return;
+  std::ostringstream os;
+  os.precision(3);
+  os << "the regions' unit sizes ask for about " << total << " triangles (region '" << largest_name
+     << "' alone " << largest << " at unit_mm " << largest_unit << "), more than the "
+     << kMaxEstimatedTriangles << " the animation mesher takes: raise unit_mm";
+  throw InvalidInputError(os.str());
+}
+
 std::size_t crossings_within(const std::vector<std::array<int, 3>>& tris,
                              const std::vector<Vector3d>& pos) {
   Mesh mesh;
@@ -505,6 +533,7 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
   const auto seconds_since = [](Clock::time_point t0) {
     return std::chrono::duration<double>(Clock::now() - t0).count();
   };
+  check_triangle_budget(g, surface);
   auto stage_start = Clock::now();
   AnimationMesh am;
   const SegmentNodes seg = initialise_segments(g, lines, surface, settings);

@@ -13,6 +13,7 @@
 #include <deque>
 #include <limits>
 #include <numeric>
+#include <sstream>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -118,11 +119,17 @@ double cell_edge_formula(const std::vector<Vector3d>& pts, int k) {
   // The box without far outliers: one stray point must not make the cells enormous.
   const auto [lo, hi] = fans_detail::robust_box(pts);
   const Vector3d d = hi - lo;
-  const double area = 2.0 * (d.x() * d.y() + d.y() * d.z() + d.x() * d.z());
-  double l = std::sqrt(area * k / static_cast<double>(pts.size()));
+  // Scaled by the longest side, so that a box spanning 1e200 does not overflow the area to
+  // infinity (an infinite cell edge made the cell index of a far point NaN).
+  const double s = d.maxCoeff();
+  if (!(s > 0)) throw InvalidInputError("build_fans: all points coincide");
+  const Vector3d u = d / s;
+  const double area = 2.0 * (u.x() * u.y() + u.y() * u.z() + u.x() * u.z());
+  double l = s * std::sqrt(area * k / static_cast<double>(pts.size()));
   // A cloud on a line has no bounding-box area; fall back to the 1D spacing.
-  if (!(l > 0)) l = d.maxCoeff() * k / static_cast<double>(pts.size());
-  if (!(l > 0)) throw InvalidInputError("build_fans: all points coincide");
+  if (!(l > 0)) l = s * k / static_cast<double>(pts.size());
+  if (!(l > 0) || !std::isfinite(l))
+    throw InvalidInputError("build_fans: the points' extent gives no usable cell size");
   return l;
 }
 
@@ -1229,9 +1236,31 @@ void orient_components_by_normals(std::vector<std::array<int, 3>>& faces,
     if (agreement[find(t[0])] < 0) std::swap(t[1], t[2]);
 }
 
+// Limit (docs/fans.md, "Limits"): every neighbour query in a cell reads all of its points, so a
+// cluster far denser than the rest (50,000 points within 1e-9 of each other beside a scan) made
+// the fans quadratic in the cluster's size. The grid's cells hold ~2k points where the cloud is
+// a surface; a cell with more than 4096 points and 64 times the cloud's mean per occupied cell
+// is refused instead of meshed for minutes. Exact copies never get here (meshed once).
+constexpr std::size_t kMaxPointsPerCell = 4096;
+
+void check_crowding(const fans_detail::CellGrid& grid, int n) {
+  const std::size_t fullest = grid.fullest_cell();
+  const std::size_t mean =
+      static_cast<std::size_t>(n) / std::max<std::size_t>(1, grid.occupied_cells());
+  if (fullest <= std::max(kMaxPointsPerCell, 64 * mean)) return;
+  std::ostringstream os;
+  os << "build_fans: " << fullest << " points lie in one grid cell of edge " << grid.cell_edge()
+     << " (the cloud's cells hold " << mean << " on average; at most "
+     << std::max(kMaxPointsPerCell, 64 * mean)
+     << "): a cluster far denser than the rest of the cloud; thin it (e.g. a voxel filter) or "
+        "remove it";
+  throw InvalidInputError(os.str());
+}
+
 void check_input(const std::vector<Vector3d>& points, const FanOptions& options) {
   options.validate();
-  if (points.size() < 3) throw InvalidInputError("build_fans: needs at least 3 points");
+  if (points.size() < 3)
+    throw InvalidInputError("build_fans: needs at least 3 distinct points spread over a surface");
   if (points.size() > static_cast<std::size_t>(std::numeric_limits<int>::max() / 16))
     throw InvalidInputError("build_fans: too many points");
   for (const auto& p : points)
@@ -1291,6 +1320,7 @@ FanResult build_fans_distinct(const std::vector<Vector3d>& input, const FanOptio
   auto t0 = std::chrono::steady_clock::now();
   Context ctx(points, options, cell_edge_formula(points, options.k));
   st.cell_edge = ctx.grid.cell_edge();
+  check_crowding(ctx.grid, n);
   const auto [lo, hi] = fans_detail::robust_box(points);
   ctx.eps_len = 1e-9 * (hi - lo).norm();  // Gap (4b): "falls on c"
   ctx.d_max = options.dmax_factor * st.cell_edge;
@@ -1457,7 +1487,10 @@ FanResult build_fans_impl(const std::vector<Vector3d>& input, const FanOptions& 
   }
   if (first.size() == static_cast<std::size_t>(n))
     return build_fans_distinct(input, options, given_normals);
-  if (first.size() == 1) throw InvalidInputError("build_fans: all points coincide");
+  if (first.size() == 1)
+    throw InvalidInputError(
+        "build_fans: all points coincide (the fan mesher needs at least 3 "
+        "distinct points spread over a surface)");
   std::sort(first.begin(), first.end());  // the distinct points keep the input's order
   std::vector<int> rank(n, -1);            // first input index -> index among the distinct
   for (std::size_t d = 0; d < first.size(); ++d) rank[first[d]] = static_cast<int>(d);

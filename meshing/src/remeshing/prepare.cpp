@@ -358,6 +358,12 @@ Mesh prepare_input(const Mesh& original, const PrepareOptions& o, PrepareStats* 
   const int nv = static_cast<int>(in.positions.size());
   const int nf = static_cast<int>(in.triangles.size());
   std::vector<char> keep(nf, 1);
+  // Always: a face whose corners are those of an earlier face (a copy, or an STL's repeated
+  // facet) is dropped. Copies stack non-manifold edges that the remesher keeps as seams, and
+  // ten copies of one triangle kept its polish busy for half a minute.
+  const std::vector<char> repeats = faces_repeating_earlier_geometry(in);
+  for (int f = 0; f < nf; ++f)
+    if (repeats[f]) keep[f] = 0, ++st.repeated_faces_removed;
   if (o.min_component_faces > 0 || o.min_component_area > 0) {
     // Components by shared vertices (union-find).
     std::vector<int> parent(nv);
@@ -366,19 +372,23 @@ Mesh prepare_input(const Mesh& original, const PrepareOptions& o, PrepareStats* 
       while (parent[i] != i) i = parent[i] = parent[parent[i]];
       return i;
     };
-    for (const auto& t : in.triangles) {
+    for (int f = 0; f < nf; ++f) {
+      if (!keep[f]) continue;
+      const auto& t = in.triangles[f];
       parent[find(t[1])] = find(t[0]);
       parent[find(t[2])] = find(t[0]);
     }
     std::unordered_map<int, int> size;
     std::unordered_map<int, double> area;
-    for (const auto& t : in.triangles) {
-      const int r = find(t[0]);
+    for (int f = 0; f < nf; ++f) {
+      if (!keep[f]) continue;
+      const int r = find(in.triangles[f][0]);
       ++size[r];
-      area[r] += triangle_area(in, t);
+      area[r] += triangle_area(in, in.triangles[f]);
     }
     std::unordered_map<int, char> counted;
     for (int f = 0; f < nf; ++f) {
+      if (!keep[f]) continue;
       const int r = find(in.triangles[f][0]);
       if (size[r] < o.min_component_faces || area[r] < o.min_component_area) {
         keep[f] = 0;

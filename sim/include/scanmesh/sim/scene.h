@@ -58,6 +58,11 @@ class Scene {
  public:
   //! Most objects a scene file may hold (every ray is tested against each).
   static constexpr std::size_t kMaxObjects = 1000;
+  //! Most elements of one skeletal object (or an animated skeleton), and most texture paints:
+  //! every field or colour evaluation sums over all of them (one object of 20,000 elements, a
+  //! 1.8 MB file, kept `sim` busy for minutes). The built-in head has 16 elements.
+  static constexpr std::size_t kMaxElements = 256;
+  static constexpr std::size_t kMaxPaints = 256;
   //! Parses a scene YAML file / text. Throws FileFormatError (naming the source and the key)
   //! for malformed YAML, unknown shape types, missing or impossible parameters.
   static Scene from_yaml_file(const std::filesystem::path& path);
