@@ -78,6 +78,23 @@ TEST_F(CliAnimesh, AnimeshWritesMeshReportAndPictures) {
   EXPECT_EQ(in_min_angle_bins, mesh.triangles.size());
   EXPECT_EQ(in_q_bins, mesh.triangles.size());
   EXPECT_EQ(read_png(out / "q_histogram.png").width, 640);
+  // mesh2d.png is upright, like the texture: the mesh lies between the crown line (y = 72 from
+  // the top) and the neck line (y = 482), so the rows above and below are the texture's own.
+  ASSERT_EQ(run("export " + (dir_ / "head.smg").string() + " --texture " +
+                (dir_ / "texture.png").string())
+                .exit_code,
+            0);
+  const Image8 texture = read_png(dir_ / "texture.png"), mesh2d = read_png(out / "mesh2d.png");
+  ASSERT_EQ(mesh2d.height, texture.height);
+  auto changed = [&](int y) {
+    int n = 0;
+    for (int x = 0; x < texture.width; ++x) n += !(texture.rgb(x, y) == mesh2d.rgb(x, y));
+    return n;
+  };
+  EXPECT_EQ(changed(50), 0);
+  EXPECT_EQ(changed(500), 0);
+  EXPECT_GT(changed(460), 20) << "mesh edges between the old crown row and the neck";
+  EXPECT_GT(changed(100), 20);
 }
 
 TEST_F(CliAnimesh, SameInputAndSeedGiveTheSameMesh) {
