@@ -2,8 +2,10 @@
 
 #include <unistd.h>
 
+#include <charconv>
 #include <cmath>
 #include <cstdarg>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -46,6 +48,20 @@ void require_in_range(const std::string& option, double value, double lo, double
 
 CLI::Validator in_range(double lo, double hi) { return bounded(lo, hi, false); }
 CLI::Validator above(double lo, double hi) { return bounded(lo, hi, true); }
+CLI::Validator seed_range() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        // Digits only: CLI11 would wrap "-1" round to 2^64 - 1 without a word.
+        const bool digits = !text.empty() && text.size() <= 20 &&
+                            text.find_first_not_of("0123456789") == std::string::npos;
+        std::uint64_t v = 0;
+        const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), v);
+        return digits && error == std::errc() && end == text.data() + text.size()
+                   ? std::string()
+                   : "value " + text + " is not a whole number from 0 to 18446744073709551615";
+      },
+      "whole number >= 0");
+}
 
 namespace {
 

@@ -8,7 +8,12 @@
 #include <ostream>
 #include <string>
 
+#include <numbers>
+
 namespace scanmesh::cli {
+
+//! Radians per degree (options are given in degrees, the libraries work in radians).
+inline constexpr double kDeg = std::numbers::pi / 180.0;
 
 //! Exit codes, documented in docs/cli.md.
 enum ExitCode : int {
@@ -32,6 +37,8 @@ enum ExitCode : int {
 CLI::Validator in_range(double lo, double hi);
 //! lo < value <= hi.
 CLI::Validator above(double lo, double hi);
+//! A seed: an unsigned 64-bit integer (CLI11 wrapped "-1" round to 2^64 - 1 without a word).
+CLI::Validator seed_range();
 
 //! Throws InvalidInputError (exit 3) "OPTION must be in [lo, hi], not VALUE" unless lo <= value
 //! <= hi and value is finite: for commands that check their options together in code.

@@ -429,7 +429,7 @@ void register_aft_commands(CLI::App& app, CommandList& commands) {
   m->add_option("--settings", aa->settings, "Region settings (.yaml/.json)")
       ->check(CLI::ExistingFile);
   m->add_option("--out", aa->out, "Output directory")->required();
-  m->add_option("--seed", aa->seed, "Seed of the random edge order");
+  m->add_option("--seed", aa->seed, "Seed of the random edge order")->check(seed_range());
   m->add_option("--strategy", aa->strategy, "Front edge order: random | shortest | longest")
       ->check(CLI::IsMember({"random", "shortest", "longest"}));
   add_data_border_option(m, aa->data_border);

@@ -238,8 +238,10 @@ int run_remesh(const RemeshArgs& a) {
        << "  triangles < 30 deg at: branch " << q.bad_at_branch << ", boundary "
        << q.bad_at_boundary << ", other skeleton " << q.bad_at_skeleton << ", interior "
        << q.bad_interior << "\n"
-       << "  Hausdorff " << q.hausdorff << " mm (" << 100 * q.hausdorff / q.bbox_diagonal
-       << " % of the diagonal), mean distance " << q.mean_distance << " mm\n"
+       // %g: an input with a vertex at 1e308 printed 155 digits in fixed notation
+       << "  Hausdorff " << format_number(q.hausdorff) << " mm ("
+       << format_number(100 * q.hausdorff / q.bbox_diagonal) << " % of the diagonal), mean distance "
+       << format_number(q.mean_distance) << " mm\n"
        << "  polish: faces < " << a.polish_angle << " deg " << s.polish_bad_before << " -> "
        << s.polish_bad_after << " (" << s.polish_moves << " moves, " << s.polish_flips
        << " flips); repair splits " << s.repair_splits;

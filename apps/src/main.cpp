@@ -50,7 +50,7 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   sim_cmd->add_option("--scanner", sim.scanner, "Scanner YAML (default: built-in head scanner)")
       ->check(CLI::ExistingFile);
-  sim_cmd->add_option("--seed", sim.seed, "Random seed of all defects");
+  sim_cmd->add_option("--seed", sim.seed, "Random seed of all defects")->check(seed_range());
   sim_cmd->add_option("--noise", sim.noise_sigma_mm, "Range noise sigma (mm)")
       ->check(in_range(0, 1e3));
   sim_cmd->add_option("-o,--out", sim.out, "Output grid file (.smg)")->required();
@@ -198,7 +198,9 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(in_range(1, 100000));
   particles_cmd->add_flag("--no-flips", particles.no_flips, "Disable edge flips to valence 6");
-  particles_cmd->add_option("--seed", particles.seed, "Random seed")->capture_default_str();
+  particles_cmd->add_option("--seed", particles.seed, "Random seed")
+      ->capture_default_str()
+      ->check(seed_range());
   particles_cmd->add_option("-o,--out", particles.out, "Output folder")->required();
 
   DemoArgs demo;
@@ -209,7 +211,7 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   demo_cmd->add_option("--scanner", demo.scanner, "Scanner YAML (default: built-in head scanner)")
       ->check(CLI::ExistingFile);
-  demo_cmd->add_option("--seed", demo.seed, "Random seed of all defects");
+  demo_cmd->add_option("--seed", demo.seed, "Random seed of all defects")->check(seed_range());
   add_cleaning_options(*demo_cmd, demo.cleaning);
   add_mesh_options(*demo_cmd, demo.meshing);
   add_device_demo_options(*demo_cmd, demo.device);

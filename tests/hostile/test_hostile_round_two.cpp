@@ -170,6 +170,13 @@ TEST_F(HostileRoundTwo, NumericOptionsRefuseNanNegativeAndAbsurdValuesNamingTheO
       {{"particles", (kConfigs / "sim" / "sphere.yaml").string(), "--edge", "-2", "--out",
         out.string()},
        "--edge"},
+      // Seeds are unsigned: "-1" used to wrap round to 2^64 - 1 without a word.
+      {{"sim", "--seed", "-1", "--out", (out / "s.smg").string()}, "--seed"},
+      {{"demo", "--seed", "-1", "--out", out.string()}, "--seed"},
+      {{"particles", (kConfigs / "sim" / "sphere.yaml").string(), "--seed", "-3", "--out",
+        out.string()},
+       "--seed"},
+      {{"sim", "--seed", "1e3", "--out", (out / "s.smg").string()}, "--seed"},
   };
   for (const Case& c : cases) {
     const RunResult r = run_cli(c.args);
