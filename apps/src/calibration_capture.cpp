@@ -11,12 +11,11 @@
 
 #include "scanmesh/core/errors.h"
 #include "scanmesh/sim/scene.h"
+#include "cli_support.h"
 #include "sim_rig.h"
 
 namespace scanmesh::cli {
 namespace {
-
-constexpr double kDeg = std::numbers::pi / 180.0;
 
 // The platter placements, in the order they are asked for. Several placements at different
 // distances from the axis (in front of it and behind it) observe the axis through independent

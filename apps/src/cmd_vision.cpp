@@ -24,8 +24,6 @@
 namespace scanmesh::cli {
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
-
 sim::RigConfig load_rig(const std::string& path) {
   return path.empty() ? sim::builtin_ciclop_rig() : sim::RigConfig::from_yaml_file(path);
 }
