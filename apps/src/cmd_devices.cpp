@@ -233,11 +233,13 @@ int run_scan(const ScanArgs& a) {
         [firmware] { return firmware->angle_rad(); }, [firmware] { return firmware->laser_mask(); },
         co);
     sim_camera->start_streaming();
-    camera = std::make_unique<SimCameraSource>(sim_camera, format, 2.0);
-    // Timeouts shrink with the simulated time, but not below what a loaded machine needs.
-    board_options.banner_timeout = std::chrono::milliseconds(3000);
-    board_options.command_timeout = std::chrono::milliseconds(500);
-    board_options.move_timeout_floor = std::chrono::milliseconds(1000);
+    camera = std::make_unique<SimCameraSource>(sim_camera, format, 5.0);
+    // The simulated board answers within microseconds, but a loaded machine (ctest -j, the
+    // sanitizer job) can hold either process off the CPU for a while: timeouts well above
+    // that, so that only a real fault (--sim-fault) ever lets one fire.
+    board_options.banner_timeout = std::chrono::milliseconds(5000);
+    board_options.command_timeout = std::chrono::milliseconds(3000);
+    board_options.move_timeout_floor = std::chrono::milliseconds(3000);
   } else {
     drivers::CameraSettings cs;
     cs.width = width;

@@ -80,8 +80,9 @@ struct Rig {
   CaptureReport scan(const fs::path& dir, double table_angle, std::size_t steps = kSteps,
                      int discard_frames = 1) {
     drivers::BoardOptions bo;
-    bo.command_timeout = std::chrono::milliseconds(200);
-    bo.move_timeout_floor = std::chrono::milliseconds(400);
+    // Patient timeouts: only the hang case waits one out; none fires because of load.
+    bo.command_timeout = std::chrono::milliseconds(3000);
+    bo.move_timeout_floor = std::chrono::milliseconds(3000);
     drivers::Board board(drivers::open_usb_transport({.vendor_id = 0x2341, .product_id = 0x0043}),
                          drivers::make_horus_dialect(), bo);
     board.connect();
@@ -95,7 +96,7 @@ struct Rig {
     cs.format = drivers::PixelFormat::Rgb24;
     cs.io = drivers::IoMethod::UserPtr;
     cs.buffer_count = 3;
-    cs.timeout = std::chrono::milliseconds(1000);
+    cs.timeout = std::chrono::milliseconds(5000);
     drivers::V4l2Camera cam("/dev/video0", cs);
     std::optional<SessionWriter> session;
     if (fs::exists(dir / "session.json")) {

@@ -1,6 +1,6 @@
 // `scanmesh scan --sim` end to end: injected faults exit with code 7 naming the device and the
 // step, and --resume completes the session to the same result as an uninterrupted scan; the
-// kill -9 test interrupts the scan at 50 random moments; `scanmesh replay` is deterministic.
+// kill -9 test interrupts the scan at 50 progress points; `scanmesh replay` is deterministic.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -48,10 +48,7 @@ class ScanCli : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     reference_ = new fs::path(scratch("reference"));
-    const auto t0 = std::chrono::steady_clock::now();
     const RunResult r = run(kScan + " --out " + reference_->string());
-    reference_seconds_ =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     ASSERT_EQ(r.exit_code, 0) << r.output;
   }
   static void TearDownTestSuite() {
@@ -59,10 +56,8 @@ class ScanCli : public ::testing::Test {
     delete reference_;
   }
   static fs::path* reference_;
-  static double reference_seconds_;
 };
 fs::path* ScanCli::reference_ = nullptr;
-double ScanCli::reference_seconds_ = 0;
 
 TEST_F(ScanCli, ReferenceSessionIsComplete) {
   const SessionReader reader(*reference_);
@@ -162,19 +157,39 @@ TEST_F(ScanCli, ReplayIsDeterministic) {
   fs::remove_all(b);
 }
 
-// The kill -9 test: the scan is started as a child process and killed with SIGKILL at a random
-// moment (seeded); `--resume` then completes it. 50 kill points, each must end with a session
-// identical (frames and step records) to the uninterrupted one.
-TEST_F(ScanCli, KillNineAtFiftyRandomMomentsLosesNothing) {
+// Entries in the session's frames/ folder (finished frames and the one being written): the
+// progress marker the kill test waits for. 0 while the folder does not exist yet.
+std::size_t frame_entries(const fs::path& session) {
+  std::error_code ec;
+  std::size_t n = 0;
+  for (fs::directory_iterator it(session / "frames", ec), end; !ec && it != end;
+       it.increment(ec))
+    ++n;
+  return n;
+}
+
+// The kill -9 test: the scan is started as a child process and killed with SIGKILL at 50 kill
+// points; `--resume` then completes it, and the session must be identical (frames and step
+// records) to the uninterrupted one. A kill point is a progress marker, not a wall time (issue
+// 31: delays drawn from the reference run's duration depended on the machine's load): the test
+// waits until the session's frames/ folder holds k entries (k random in [0, frames - 2]), then
+// spins a random 0-400 us more so that the kill also lands inside a frame or a step record
+// being written. With at least two frames still to come when it fires, the kill interrupts
+// the scan however fast or slow the machine is.
+TEST_F(ScanCli, KillNineAtFiftyProgressPointsLosesNothing) {
+  const std::size_t frames = frame_entries(*reference_);
+  ASSERT_GE(frames, 3u);
   std::mt19937 rng(20261122);
-  std::uniform_real_distribution<double> when(0.0, reference_seconds_);
+  std::uniform_int_distribution<std::size_t> marker(0, frames - 2);
+  std::uniform_int_distribution<int> extra_us(0, 400);
   const fs::path dir = scratch("killed");
   int killed_mid_scan = 0;
   for (int trial = 0; trial < 50; ++trial) {
     SCOPED_TRACE("trial " + std::to_string(trial));
     fs::remove_all(dir);
     const std::string args = kScan + " --out " + dir.string() + " --resume";
-    const double delay = when(rng);
+    const std::size_t k = marker(rng);
+    const auto extra = std::chrono::microseconds(extra_us(rng));
     const pid_t pid = fork();
     ASSERT_GE(pid, 0);
     if (pid == 0) {
@@ -186,18 +201,32 @@ TEST_F(ScanCli, KillNineAtFiftyRandomMomentsLosesNothing) {
             static_cast<char*>(nullptr));
       _exit(127);
     }
-    std::this_thread::sleep_for(std::chrono::duration<double>(delay));
-    ::kill(pid, SIGKILL);
+    // Wait for the marker (or the child's end, which would be a failure below).
     int status = 0;
-    ::waitpid(pid, &status, 0);
-    if (WIFSIGNALED(status)) ++killed_mid_scan;
+    bool exited = false;
+    while (frame_entries(dir) < k) {
+      if (::waitpid(pid, &status, WNOHANG) == pid) {
+        exited = true;
+        break;
+      }
+      std::this_thread::yield();
+    }
+    if (!exited) {
+      const auto until = std::chrono::steady_clock::now() + extra;
+      while (std::chrono::steady_clock::now() < until) {
+      }
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, &status, 0);
+    }
+    if (WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) ++killed_mid_scan;
     const RunResult resumed = run(args);
     ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
     ASSERT_TRUE(test::sessions_identical(dir, *reference_));
   }
-  // Most kill points must really interrupt the scan, or the test proves nothing (the bound
-  // leaves room for the machine being faster now than during the reference run).
-  EXPECT_GE(killed_mid_scan, 25);
+  // Every kill point must really interrupt the scan, or the test proves nothing. One trial in
+  // ten is allowed to miss: a scheduler can hold this process off the CPU while the child
+  // finishes its last frames.
+  EXPECT_GE(killed_mid_scan, 45);
   fs::remove_all(dir);
 }
 

@@ -26,11 +26,16 @@ inline sim::SimBoardOptions fast_board() {
   return o;
 }
 
+// Timeouts far above any round trip a loaded machine needs (ctest -j, sanitizers): a test that
+// expects a timeout waits it out (a few tests, 3 s each), and no other test can see one fire
+// because the machine is busy (issue 31: 150 ms fired under load).
+inline constexpr auto kPatientTimeout = std::chrono::milliseconds(3000);
+
 inline drivers::BoardOptions fast_driver() {
   drivers::BoardOptions o;
-  o.command_timeout = std::chrono::milliseconds(150);
-  o.move_timeout_floor = std::chrono::milliseconds(300);
-  o.banner_timeout = std::chrono::milliseconds(2000);
+  o.command_timeout = kPatientTimeout;
+  o.move_timeout_floor = kPatientTimeout;
+  o.banner_timeout = std::chrono::milliseconds(5000);
   o.feed_rate_deg_per_s = 120;
   return o;
 }

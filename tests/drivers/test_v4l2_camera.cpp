@@ -42,7 +42,7 @@ struct CameraRig {
     s.format = f;
     s.io = io;
     s.buffer_count = 3;
-    s.timeout = std::chrono::milliseconds(1000);
+    s.timeout = std::chrono::milliseconds(5000);
     return s;
   }
   std::atomic<double> angle{0.3};
