@@ -796,6 +796,62 @@ struct SpringNetwork::Impl {
     for (std::size_t i = 0; i < verts.size(); ++i) verts[i].p = next[i];
   }
 
+  // A face turned against the surface: its normal points against the sum of its corners'
+  // gradients (evaluated this step; the same test as keeps_orientation, without evaluating F).
+  bool turned_at_corners(const std::array<int, 3>& t) const {
+    Vector3d g = Vector3d::Zero();
+    for (int v : t) {
+      if (!verts[v].defined) return false;
+      g += verts[v].f.gradient;
+    }
+    return face_normal(t).dot(g) < 0.0;
+  }
+  int turned_faces_around(int v) const {
+    int n = 0;
+    for (int f : verts[v].faces) n += turned_at_corners(faces[f].v) ? 1 : 0;
+    return n;
+  }
+
+  // Gap decision 39: a face turned over (the cut's closing fans across a neck, a face the
+  // move guard could not protect because the gradient turns within it) stays turned: springs
+  // act along edges and do not see orientation. Each corner of a turned face moves to the
+  // centroid of its one-ring (Newton-projected) when that turns fewer faces around it over;
+  // a few rounds, as the untangling of a folded mesh by Laplacian steps.
+  int untangle_turned_faces(const ImplicitSurface& surface) {
+    int moved = 0;
+    for (int round = 0; round < 4; ++round) {
+      std::vector<int> corners;
+      for (const Face& f : faces)
+        if (f.alive && turned_at_corners(f.v))
+          for (int v : f.v)
+            if (!verts[v].boundary) corners.push_back(v);
+      if (corners.empty()) break;
+      std::sort(corners.begin(), corners.end());
+      corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+      int moved_now = 0;
+      for (int v : corners) {
+        const auto ring = neighbors(v);
+        if (ring.empty()) continue;
+        Vector3d c = Vector3d::Zero();
+        for (int x : ring) c += P(x);
+        c /= static_cast<double>(ring.size());
+        if (const auto q = project_to_surface(surface, c, 4, 1e-10 * R());
+            q && (*q - c).norm() < 0.5 * R())
+          c = *q;
+        const int before = turned_faces_around(v);
+        const Vector3d old = verts[v].p;
+        verts[v].p = c;
+        if (turned_faces_around(v) < before)
+          ++moved_now;
+        else
+          verts[v].p = old;
+      }
+      moved += moved_now;
+      if (moved_now == 0) break;
+    }
+    return moved;
+  }
+
   // Collapse only if no spring at the merged particle would become longer than `limit`.
   bool collapse_keeps_short(int a, int b, double limit) const {
     const Vector3d m = 0.5 * (P(a) + P(b));
@@ -944,6 +1000,7 @@ struct SpringNetwork::Impl {
     }
     if (cuts) {
       rebuild_springs();
+      clear_gap_marks();
       return cuts;
     }
     // Patience: constriction (Step 2) usually turns the first ragged band of candidates into a
@@ -962,7 +1019,24 @@ struct SpringNetwork::Impl {
     for (std::size_t i = 0; i < verts.size(); ++i)
       if (verts[i].alive && verts[i].faces.empty()) kill_vertex(static_cast<int>(i));
     close_new_holes(surface);
+    clear_gap_marks();
     return 1;
+  }
+
+  // Gap decision 40: the marks of Steps 1-2 describe the neck that was just cut. Kept, the
+  // special springs left on the rims of the closing fans held their shrunken rest length
+  // (special_factor R) and could not be split, so each new cap kept a crumpled patch of tiny
+  // triangles that folded over (dihedral angles up to 177 deg) a few frames later. After a
+  // cut every mark is dropped with its reduced rest length; Step 1 marks again, in the next
+  // step, whatever still spans a gap.
+  void clear_gap_marks() {
+    for (auto& [k, s] : springs) {
+      if (s.special) s.rest = R();
+      s.special = false;
+      s.topo = false;
+    }
+    any_topo_ = false;
+    candidate_steps_ = 0;
   }
 
   // Closes every hole that is not an original border by a fan to a new particle at its
@@ -1220,12 +1294,6 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
     const Vector3d d = m.P(ends[1]) - m.P(ends[0]);
     if (d.norm() > 0.0) border_dir.emplace(static_cast<int>(i), d.normalized());
   }
-  std::vector<char> near_border(m.verts.size(), 0);
-  for (std::size_t i = 0; i < m.verts.size(); ++i)
-    if (m.verts[i].alive && m.verts[i].boundary) {
-      near_border[i] = 1;
-      for (int x : m.neighbors(static_cast<int>(i))) near_border[x] = 1;
-    }
   // Eq. (8) and (11): constraint velocity with feedback phi; phi * dt = 1 (one Newton step).
   const double cap = o.max_step * m.R();
   for (std::size_t i = 0; i < m.verts.size(); ++i) {
@@ -1246,10 +1314,13 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
     }
     const double len = move.norm();
     if (len > cap) move *= cap / len;
-    // Gap decision 35: at a border (scan mode) a move may not turn one of the particle's
-    // triangles over (normal against the outward gradient); the border is free on one side,
-    // so nothing else stops a particle next to it from crossing a border edge.
-    if (g2 > 1e-20 && near_border[i] && !m.keeps_orientation(static_cast<int>(i), v.p + move, g)) {
+    // Gap decisions 35 and 39: a move may not turn one of the particle's triangles over
+    // (normal against the outward gradient). At a border (scan mode) the border is free on
+    // one side, so nothing else stops a particle next to it from crossing a border edge; in
+    // the interior, the explicit Euler step plus the constraint's projection turned a few
+    // triangles over where the surface moves fast (the caps of two blobs pulled apart:
+    // 16-34 crossing face pairs per frame), and nothing turned them back.
+    if (g2 > 1e-20 && !m.keeps_orientation(static_cast<int>(i), v.p + move, g)) {
       Vector3d tangential = move - g.dot(move) / g2 * g;
       const Vector3d normal_part = move - tangential;
       move = Vector3d::Zero();
@@ -1261,6 +1332,8 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
     }
     v.p += move;
   }
+
+  m.untangle_turned_faces(surface);
 
   // Candidates of Step 2 and Rules 1-2 from one sequential pass over the springs (a spring
   // whose length an operation of this step changes is marked by it, so nothing is missed
@@ -1286,6 +1359,7 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
         ++rep.special_collapses;
     }
 
+
   // Rules 1-4: collapse (14) / split (15) settled (16), unmarked (Rule 3) springs.
   for (std::uint64_t k : rule_candidates) {
     const auto it = m.springs.find(k);
@@ -1301,6 +1375,7 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
       if (m.try_split(a, b, surface)) ++rep.splits;
     }
   }
+
   // Flips depend on valences (and, weakly, on angles): a pass after a step that changed
   // nothing is repeated only every 10th step.
   if (o.flips && (m.last_changed_ || rep.changed() || m.iter % 10 == 0)) {
@@ -1311,6 +1386,7 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
       if (m.try_flip(key_lo(k), key_hi(k))) ++rep.flips;
     }
   }
+
   if (o.flips) {
     // Valence-3 particles cannot be repaired by flips (a flip never lowers the valence of a
     // vertex below 4 here); remove them by collapsing their shortest spring.
@@ -1338,7 +1414,13 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
     else
       rep.cuts += c;
   }
+
   if (o.topology_change && m.any_topo_ && m.remove_lost_particles(surface) > 0) ++rep.fallback_cuts;
+  if (rep.cuts + rep.fallback_cuts > 0) {
+    m.evaluate_all(surface);
+    m.untangle_turned_faces(surface);
+  }
+
   for (auto& [k, s] : m.springs) s.old_length = m.length(key_lo(k), key_hi(k));
   m.last_changed_ = rep.changed();
   return rep;
