@@ -1,6 +1,7 @@
 #include "scanmesh/acquisition/session.h"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -438,14 +439,22 @@ void SessionWriter::append_step(double angle_rad, const std::vector<drivers::Fra
   const int flags = O_WRONLY | O_APPEND | O_CREAT | O_CLOEXEC;  // non-atomic: step journal
   const int fd = ::open(steps.c_str(), flags, 0644);
   if (fd < 0) throw IoError("cannot open '" + steps.string() + "': " + std::strerror(errno));
+  // A write that fails midway (disk full) is cut back to the journal's length before it, so
+  // the journal never holds a torn line it did not need to (a kill -9 still can; resume
+  // drops it) and the steps recorded so far stay readable as they are.
+  struct stat before {};
+  const off_t old_size = ::fstat(fd, &before) == 0 ? before.st_size : -1;
   std::size_t done = 0;
   while (done < line.size()) {
     const ssize_t n = ::write(fd, line.data() + done, line.size() - done);
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) {
-      const int e = errno;
+      const int e = n == 0 ? EIO : errno;
+      if (old_size >= 0 && ::ftruncate(fd, old_size) == 0) ::fsync(fd);
       ::close(fd);
-      throw IoError("cannot append to '" + steps.string() + "': " + std::strerror(e));
+      throw IoError("cannot append to '" + steps.string() + "': " + std::strerror(e) +
+                    "; the steps recorded so far are kept: free space and continue with "
+                    "--resume");
     }
     done += static_cast<std::size_t>(n);
   }

@@ -30,8 +30,22 @@ const char* file_kind(mode_t mode) {
   return "not a regular file";
 }
 
+// The file a user asked for: a staged output (StagedFiles) is written under its temporary
+// name ".NAME.tmp.PID.N", which means nothing to the user; messages name NAME.
+std::filesystem::path name_for_messages(const std::filesystem::path& path) {
+  const std::string f = path.filename().string();
+  const auto tmp = f.rfind(".tmp.");
+  if (f.size() < 2 || f[0] != '.' || tmp == std::string::npos || tmp <= 1) return path;
+  const std::string tail = f.substr(tmp + 5);  // "PID.N"
+  const auto dot = tail.find('.');
+  const bool digits = dot != std::string::npos && dot > 0 && dot + 1 < tail.size() &&
+                      tail.find_first_not_of("0123456789.") == std::string::npos &&
+                      tail.find('.', dot + 1) == std::string::npos;
+  return digits ? path.parent_path() / f.substr(1, tmp - 1) : path;
+}
+
 std::string os_error(const std::string& what, const std::filesystem::path& path, int err) {
-  return "cannot " + what + " '" + path.string() + "': " + std::strerror(err);
+  return "cannot " + what + " '" + name_for_messages(path).string() + "': " + std::strerror(err);
 }
 
 // Closes the descriptor and removes the temporary file unless released; keeps every error path

@@ -4,10 +4,12 @@
 // and no temporary file, and leave an existing output file as it was.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <map>
 #include <string>
 #include <vector>
 
+#include "../acquisition/session_compare.h"
 #include "cli_runner.h"
 #include "scanmesh/core/grid_file.h"
 #include "scanmesh/core/mesh_io.h"
@@ -174,6 +176,131 @@ TEST_F(DiskFull, FailureMidwayThroughTheDemoKeepsEveryFinishedFileWhole) {
       EXPECT_NO_THROW((void)read_ply(p)) << p;
     }
   }
+}
+
+// --- the commands added since the first round (issue 31) ------------------------------------
+
+TEST_F(DiskFull, Remesh) {
+  // Staged outputs are named by their final name, not ".mesh.ply.tmp.PID.N".
+  expect_io_error_and_nothing_lost(
+      {"remesh", in("mesh.ply"), "--vertices", "100", "--out", out("r")}, {"r/mesh.ply"});
+  const RunResult r = run_cli({"remesh", in("mesh.ply"), "--vertices", "100", "--out", out("r2")},
+                              kTinyLimit);
+  EXPECT_NE(r.output.find("/r2/"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find(".tmp."), std::string::npos) << r.output;
+}
+
+TEST_F(DiskFull, Import) {
+  expect_io_error_and_nothing_lost({"import", in("mesh.ply"), "--out", out("imported.smg")},
+                                   {"imported.smg"});
+}
+
+// A ring drawn over the 64 x 48 scan (grid pixels, rows from the top).
+void write_ring_lines(const fs::path& path) {
+  write_text(path, R"({"lines": [{"id": "ring", "closed": true,
+                       "points": [[4, 5], [20, 5], [20, 11], [4, 11]]}]})");
+}
+
+TEST_F(DiskFull, RegionsPicture) {
+  write_ring_lines(out_ / "ring.json");
+  expect_io_error_and_nothing_lost(
+      {"regions", in("scan.smg"), "--lines", out("ring.json"), "--png", out("regions.png")},
+      {"regions.png"});
+}
+
+TEST_F(DiskFull, Animesh) {
+  write_ring_lines(out_ / "ring.json");
+  expect_io_error_and_nothing_lost(
+      {"animesh", in("scan.smg"), "--lines", out("ring.json"), "--out", out("a")},
+      {"a/mesh.ply"});
+}
+
+// The device commands. ctest runs every test in its own process, so each fixture's set-up runs
+// once per test: the scan sessions are cheap; the calibration (a 320 x 240 calibration session,
+// where the chessboard is found in enough views, and its computation) is made once in the one
+// test that needs it.
+class DiskFullDevices : public DiskFull {
+ protected:
+  static void SetUpTestSuite() {
+    dev_ = new fs::path(scratch_dir("disk_full_devices"));
+    std::vector<std::string> small = small_scan_args();
+    small.push_back((*dev_ / "small_scan").string());
+    const RunResult small_scan = run_cli(small);
+    ASSERT_EQ(small_scan.exit_code, 0) << small_scan.output;
+  }
+  static void TearDownTestSuite() {
+    fs::remove_all(*dev_);
+    delete dev_;
+  }
+  static std::string dev(const char* name) { return (*dev_ / name).string(); }
+  // A 7-step scan of 32 x 24 frames (~0.2 KB each; ~0.5 KB of journal per step), up to --out.
+  static std::vector<std::string> small_scan_args() {
+    return {"scan",   "--sim",   "--steps",      "7",    "--lasers", "2",
+            "--size", "32x24",   "--time-scale", "0.01", "--settle", "0.05",
+            "--out"};
+  }
+  static fs::path* dev_;
+};
+fs::path* DiskFullDevices::dev_ = nullptr;
+
+// The whole calibration (OpenCV detection, the Ceres adjustment) runs here, under the
+// sanitizers too; then reconstruct and check-calibration with that calibration.
+TEST_F(DiskFullDevices, CalibrateReconstructAndCheckCalibration) {
+  const RunResult scan = run_cli({"scan", "--sim", "--steps", "4", "--size", "320x240",
+                                  "--time-scale", "0.01", "--out", dev("scan")});
+  ASSERT_EQ(scan.exit_code, 0) << scan.output;
+  const RunResult session =
+      run_cli({"scan", "--sim", "--calibration", "--size", "320x240", "--time-scale", "0.01",
+               "--out", dev("calibration_session")});
+  ASSERT_EQ(session.exit_code, 0) << session.output;
+  const RunResult calibrate =
+      run_cli({"calibrate", dev("calibration_session"), "--out", dev("calib.yaml")});
+  ASSERT_EQ(calibrate.exit_code, 0) << calibrate.output;
+  expect_io_error_and_nothing_lost(
+      {"calibrate", dev("calibration_session"), "--out", out("calib.yaml")}, {"calib.yaml"});
+  expect_io_error_and_nothing_lost(
+      {"reconstruct", dev("scan"), "--calib", dev("calib.yaml"), "--out", out("grid.smg")},
+      {"grid.smg"});
+  expect_io_error_and_nothing_lost({"check-calibration", "--calib", dev("calib.yaml"), "--sim",
+                                    "--size", "320x240", "--steps", "8", "--report",
+                                    out("check.json")},
+                                   {"check.json"});
+}
+
+TEST_F(DiskFullDevices, Replay) {
+  // The contact sheet (written first) of 32 x 24 tiles is ~1.1 KB: above the sanitizer tree's
+  // 1 KB limit too.
+  expect_io_error_and_nothing_lost({"replay", dev("small_scan"), "--out", out("replay")},
+                                   {"replay/contact_sheet.png"});
+}
+
+// A scan that runs out of disk keeps the steps it recorded, with no torn journal line, and
+// --resume (with space again) completes it to the session an uninterrupted scan records.
+TEST_F(DiskFullDevices, ScanKeepsItsStepsAndResumes) {
+  std::vector<std::string> args = small_scan_args();
+  args.push_back(out("session"));
+  // Every frame and the session header fit under 2,000 bytes; the step journal outgrows it
+  // after about four steps.
+  const RunResult r = run_cli(args, 2000);
+  EXPECT_EQ(r.exit_code, 5) << describe(args, r);
+  EXPECT_NE(r.output.find("scanmesh: I/O error: cannot append to '" + out("session") +
+                          "/steps.jsonl'"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("--resume"), std::string::npos) << r.output;
+  EXPECT_FALSE(has_temporary_file(out_ / "session")) << r.output;
+  const std::string journal = read_text(out_ / "session" / "steps.jsonl");
+  EXPECT_FALSE(journal.empty()) << "the failure was not midway";
+  EXPECT_EQ(journal.back(), '\n') << "torn journal line";
+  const std::size_t steps_kept = static_cast<std::size_t>(
+      std::count(journal.begin(), journal.end(), '\n'));
+  EXPECT_GT(steps_kept, 0u);
+  EXPECT_LT(steps_kept, 7u);
+  std::vector<std::string> resume = args;
+  resume.push_back("--resume");
+  const RunResult resumed = run_cli(resume);
+  ASSERT_EQ(resumed.exit_code, 0) << describe(resume, resumed);
+  EXPECT_TRUE(test::sessions_identical(out_ / "session", *dev_ / "small_scan"));
 }
 
 }  // namespace

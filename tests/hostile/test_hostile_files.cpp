@@ -5,6 +5,8 @@
 // claims.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <cstring>
 #include <limits>
 #include <string>
@@ -145,7 +147,9 @@ class HostileFiles : public ::testing::Test {
              (out / "x.stl").string()},
             {"curvature", grid.string(), "--out", (out / "curv").string()},
             {"fans", grid.string(), "--out", (out / "x.ply").string()},
-            {"particles", "--grid", grid.string(), "--edge", "20", "--out", (out / "p").string()}};
+            {"particles", "--grid", grid.string(), "--edge", "20", "--out", (out / "p").string()},
+            {"regions", grid.string(), "--png", (out / "regions.png").string()},
+            {"animesh", grid.string(), "--out", (out / "a").string()}};
   }
 
   static fs::path* dir_;
@@ -177,7 +181,9 @@ TEST_F(HostileFiles, MalformedMeshesAreRejectedByEveryMeshCommand) {
          {std::vector<std::string>{"info", in.string()},
           {"render", in.string(), "--out", (out / "r.png").string()},
           {"check", in.string(), "--histogram", (out / "h.png").string()},
-          {"fans", in.string(), "--out", (out / "f.ply").string()}})
+          {"fans", in.string(), "--out", (out / "f.ply").string()},
+          {"remesh", in.string(), "--vertices", "50", "--out", (out / "r").string()},
+          {"import", in.string(), "--out", (out / "i.smg").string()}})
       expect_rejected(args, in, out);
   }
 }
@@ -205,6 +211,109 @@ TEST_F(HostileFiles, MalformedScenesAndScannersAreRejected) {
     const fs::path in = *dir_ / name;
     const fs::path out = scratch_dir(std::string("scanner_out_") + name);
     expect_rejected({"sim", "--scanner", in.string(), "--out", (out / "s.smg").string()}, in, out);
+  }
+}
+
+// Damaged copies of a recorded session: each returns the file a message must name.
+std::vector<fs::path> damaged_sessions(const fs::path& good, const fs::path& dir,
+                                       const std::string& prefix) {
+  auto copy = [&](const std::string& name) {
+    const fs::path d = dir / (prefix + name);
+    fs::remove_all(d);
+    fs::copy(good, d, fs::copy_options::recursive);
+    return d;
+  };
+  std::vector<fs::path> frames;
+  for (const auto& e : fs::directory_iterator(good / "frames")) frames.push_back(e.path());
+  std::sort(frames.begin(), frames.end());
+  std::vector<fs::path> out;
+  {
+    const fs::path d = copy("garbage_manifest");
+    write_text(d / "session.json", "{\"format\": \"scanmesh-session\", \"steps\": [1, 2");
+    out.push_back(d / "session.json");
+  }
+  {
+    const fs::path d = copy("garbage_journal");
+    write_text(d / "steps.jsonl", "{\"step\": 0, \"frames\": 7}\n{not json\n");
+    out.push_back(d / "steps.jsonl");
+  }
+  {
+    const fs::path d = copy("flipped_frame");
+    const fs::path frame = d / "frames" / frames.at(1).filename();
+    std::string bytes = read_text(frame);
+    bytes[bytes.size() / 2] = static_cast<char>(bytes[bytes.size() / 2] ^ 0x5a);
+    write_text(frame, bytes);
+    out.push_back(frame);
+  }
+  {
+    const fs::path d = copy("missing_frame");
+    const fs::path frame = d / "frames" / frames.at(2).filename();
+    fs::remove(frame);
+    out.push_back(frame);
+  }
+  return out;
+}
+
+// The session folder a damaged file belongs to.
+fs::path session_of(const fs::path& damaged) {
+  const fs::path parent = damaged.parent_path();
+  return parent.filename() == "frames" ? parent.parent_path() : parent;
+}
+
+// Sessions and calibrations (issue 31: replay, reconstruct, calibrate and check-calibration
+// were never fed damaged files): 4-step sessions of 32 x 24 frames, damaged copies of them,
+// and damaged calibration files.
+TEST_F(HostileFiles, DamagedSessionsAndCalibrationsAreRejectedByEveryDeviceCommand) {
+  const fs::path good = *dir_ / "session", good_calibration = *dir_ / "calibration_session";
+  RunResult r = run_cli({"scan", "--sim", "--steps", "4", "--size", "32x24", "--time-scale",
+                         "0.01", "--settle", "0.05", "--out", good.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = run_cli({"scan", "--sim", "--calibration", "--size", "32x24", "--time-scale", "0.01",
+               "--out", good_calibration.string()});
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  // A calibration for 32 x 24 frames (the values need not be good: the files around it are
+  // what is damaged).
+  const std::string calibration =
+      "format: scanmesh-calibration\nversion: 1\nimage: {width: 32, height: 24}\n"
+      "intrinsics: {fx: 40, fy: 40, cx: 16, cy: 12}\n"
+      "distortion: {k1: 0, k2: 0, p1: 0, p2: 0, k3: 0}\n"
+      "axis: {direction: [0, -1, 0], origin_mm: [0, 50, 400]}\n"
+      "lasers:\n  - {name: left, normal: [1, 0, 0], distance_mm: 10}\n"
+      "  - {name: right, normal: [-1, 0, 0], distance_mm: 10}\n";
+  write_text(*dir_ / "calib.yaml", calibration);
+  for (const fs::path& damaged : damaged_sessions(good, *dir_, "scan_")) {
+    const fs::path session = session_of(damaged);
+    SCOPED_TRACE(session.filename().string());
+    const fs::path out = scratch_dir("session_out_" + session.filename().string());
+    expect_rejected({"replay", session.string(), "--out", (out / "replay").string()}, damaged,
+                    out);
+    expect_rejected({"reconstruct", session.string(), "--calib", (*dir_ / "calib.yaml").string(),
+                     "--out", (out / "grid.smg").string()},
+                    damaged, out);
+  }
+  for (const fs::path& damaged : damaged_sessions(good_calibration, *dir_, "calibration_")) {
+    const fs::path session = session_of(damaged);
+    SCOPED_TRACE(session.filename().string());
+    const fs::path out = scratch_dir("session_out_" + session.filename().string());
+    expect_rejected({"calibrate", session.string(), "--out", (out / "calib.yaml").string()},
+                    damaged, out);
+  }
+  for (const auto& [name, text] :
+       {std::pair<const char*, std::string>{"empty_calib.yaml", ""},
+        {"not_a_calib.yaml", "objects: [1, 2\n"},
+        {"nan_calib.yaml", std::string(calibration).replace(calibration.find("fx: 40"), 6,
+                                                             "fx: .nan")},
+        {"other_format.yaml", "format: something-else\nversion: 1\n"}}) {
+    SCOPED_TRACE(name);
+    const fs::path calib = *dir_ / name;
+    write_text(calib, text);
+    const fs::path out = scratch_dir(std::string("calib_out_") + name);
+    expect_rejected({"reconstruct", good.string(), "--calib", calib.string(), "--out",
+                     (out / "grid.smg").string()},
+                    calib, out);
+    expect_rejected({"check-calibration", "--calib", calib.string(), "--sim", "--size", "32x24",
+                     "--steps", "4", "--report", (out / "check.json").string()},
+                    calib, out);
   }
 }
 
