@@ -372,7 +372,11 @@ Frame V4l2Camera::grab() {
 }
 
 void V4l2Camera::flush() {
-  for (int i = 0; i < 64; ++i) {
+  // Stale frames are the ones already in the driver's buffers: at most one per buffer. Reading
+  // on until none is ready made the count depend on the host's speed: a host slower than the
+  // frame period always finds a new frame (up to 64 were read), so the frames a scan step used
+  // up, and with them the step a camera fault hits, varied with the machine's load.
+  for (std::size_t i = 0; i < buffers_.size(); ++i) {
     Frame f;
     bool got = false;
     try {
