@@ -96,29 +96,6 @@ void print_prepare_stats(const remeshing::PrepareOptions& po, const remeshing::P
           << " faces), closed " << ps.holes_filled << " holes (" << ps.faces_added << " faces)\n";
 }
 
-// The count is the one promise of the command: a miss over 1 % is an error, not a result.
-void require_vertex_count(const remeshing::RemeshResult& r, int target, std::size_t loops) {
-  const remeshing::RemeshStats& s = r.stats;
-  const int got = s.output_vertices;
-  if (std::abs(got - target) <= 0.01 * target) return;
-  std::ostringstream msg;
-  msg << "remesh: reached " << got << " vertices, not the " << target << " asked for ("
-      << std::showpos << std::lround(100.0 * (got - target) / target) << std::noshowpos
-      << " %): ";
-  if (2 * s.branch_vertices > static_cast<std::size_t>(target))
-    msg << "the input's " << loops << " boundary loops and feature lines make "
-        << s.skeleton_segments << " skeleton segments with " << s.branch_vertices
-        << " fixed vertices, which the remesher keeps; let the scan clean-up run (--prepare, "
-           "or drop --no-prepare), close holes (--fill-holes) or ask for more vertices";
-  else
-    msg << s.rejected_error << " operations were refused by the normal bounds (E_dist / "
-        << "E_glatt) and " << s.rejected_topology << " by the link condition, and "
-        << s.repair_splits << " edges were split to undo self-intersections; an input that "
-           "folds or cuts itself does this (see scanmesh check; --theta-dist / --theta-glatt "
-           "widen the bounds)";
-  throw InvalidInputError(msg.str());
-}
-
 int run_remesh(const RemeshArgs& a) {
   using namespace remeshing;
   PrepareStats ps;

@@ -101,6 +101,25 @@ class Remesh(unittest.TestCase):
         distance = np.linalg.norm(mesh.positions, axis=1)
         self.assertLess(np.abs(distance - 50.0).max(), 1.0)
 
+    def test_a_missed_vertex_count_raises_as_the_cli_exits_3(self):
+        # A flat 60 x 60 square grid with 60 square holes: their corners are fixed skeleton
+        # vertices, so 100 vertices cannot be reached (184 here): a ValueError saying why, not a
+        # mesh with the wrong count.
+        n = 61
+        xs, ys = np.meshgrid(np.arange(n, dtype=float), np.arange(n, dtype=float))
+        positions = np.stack([xs.ravel(), ys.ravel(), np.zeros(n * n)], axis=1)
+        holes = {(i, j) for i in range(3, 58, 6) for j in range(3, 58, 10)}
+        triangles = []
+        for j in range(n - 1):
+            for i in range(n - 1):
+                if (i, j) in holes:
+                    continue
+                a, b, c, d = j * n + i, j * n + i + 1, (j + 1) * n + i + 1, (j + 1) * n + i
+                triangles += [[a, b, c], [a, c, d]]
+        plate = scanmesh.Mesh(positions, np.array(triangles, dtype=np.int32))
+        with self.assertRaisesRegex(ValueError, "not the 100 asked for.*boundary loops"):
+            scanmesh.remesh(plate, 100, prepare=False)
+
     def test_invalid_options_raise_value_error(self):
         sphere, _ = scanmesh.build_fans(random_sphere_cloud(300, 5.0, seed=6))
         with self.assertRaisesRegex(ValueError, "target vertex count"):

@@ -10,6 +10,7 @@
 #include <numbers>
 #include <queue>
 #include <set>
+#include <sstream>
 #include <unordered_map>
 
 #include "scanmesh/core/errors.h"
@@ -1548,6 +1549,29 @@ RemeshResult remesh(const Mesh& input, const RemeshOptions& options) {
   input.validate();
   Remesher r(input, options);
   return r.run();
+}
+
+void require_vertex_count(const RemeshResult& result, int target,
+                          std::size_t input_boundary_loops) {
+  const RemeshStats& s = result.stats;
+  const int got = s.output_vertices;
+  if (std::abs(got - target) <= 0.01 * target) return;
+  std::ostringstream msg;
+  msg << "remesh: reached " << got << " vertices, not the " << target << " asked for ("
+      << std::showpos << std::lround(100.0 * (got - target) / target) << std::noshowpos
+      << " %): ";
+  if (2 * s.branch_vertices > static_cast<std::size_t>(target))
+    msg << "the input's " << input_boundary_loops << " boundary loops and feature lines make "
+        << s.skeleton_segments << " skeleton segments with " << s.branch_vertices
+        << " fixed vertices, which the remesher keeps; let the scan clean-up run (prepare), "
+           "close holes (fill holes) or ask for more vertices";
+  else
+    msg << s.rejected_error << " operations were refused by the normal bounds (E_dist / "
+        << "E_glatt) and " << s.rejected_topology << " by the link condition, and "
+        << s.repair_splits << " edges were split to undo self-intersections; an input that "
+           "folds or cuts itself does this (see check; widening theta dist / theta glatt "
+           "widens the bounds)";
+  throw InvalidInputError(msg.str());
 }
 
 }  // namespace scanmesh::remeshing

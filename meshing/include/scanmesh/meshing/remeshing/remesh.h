@@ -195,4 +195,11 @@ struct RemeshResult {
 //! mesh, a target below 4 or above 10 million, or invalid feature lines.
 RemeshResult remesh(const Mesh& input, const RemeshOptions& options = {});
 
+//! The vertex count is the one promise of a remesh: throws InvalidInputError saying why (the
+//! fixed skeleton vertices of `input_boundary_loops` loops and feature lines, or operations the
+//! bounds refused) when `result` misses `target` by more than 1 %. The CLI and the Python
+//! module call it after remesh().
+void require_vertex_count(const RemeshResult& result, int target,
+                          std::size_t input_boundary_loops);
+
 }  // namespace scanmesh::remeshing
