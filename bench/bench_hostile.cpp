@@ -56,6 +56,17 @@ Run run_scanmesh(const std::vector<std::string>& args) {
 
 void write_text(const fs::path& p, const std::string& s) { std::ofstream(p, std::ios::binary) << s; }
 
+// About n points (a square number) on a wavy sheet, as .xyz text: the clouds the fans rows
+// hide their outliers in.
+std::string sheet_xyz(std::size_t n) {
+  std::string s;
+  const int side = static_cast<int>(std::sqrt(static_cast<double>(n)));
+  for (int i = 0; i < side; ++i)
+    for (int j = 0; j < side; ++j)
+      s += std::to_string(i + 0.3 * std::sin(j)) + " " + std::to_string(j) + " 0\n";
+  return s;
+}
+
 std::string ply_header(std::size_t vertices, std::size_t faces) {
   return "ply\nformat ascii 1.0\nelement vertex " + std::to_string(vertices) +
          "\nproperty float x\nproperty float y\nproperty float z\nelement face " +
@@ -113,10 +124,7 @@ std::vector<Case> cases() {
        }},
       {"fans: n copies of a point + sheet", 50000,
        [](std::size_t n, const fs::path& d) {
-         std::string s;
-         for (int i = 0; i < 40; ++i)
-           for (int j = 0; j < 40; ++j)
-             s += std::to_string(i + 0.3 * std::sin(j)) + " " + std::to_string(j) + " 0\n";
+         std::string s = sheet_xyz(1600);  // a 40 x 40 sheet
          for (std::size_t i = 0; i < n; ++i) s += "5 5 0\n";
          write_text(d / "dup.xyz", s);
          return std::vector<std::string>{"fans", (d / "dup.xyz").string(), "--out",
@@ -124,11 +132,7 @@ std::vector<Case> cases() {
        }},
       {"fans: sheet + 3 % outliers to 1e308", 40000,
        [](std::size_t n, const fs::path& d) {
-         std::string s;
-         const int side = static_cast<int>(std::sqrt(static_cast<double>(n)));
-         for (int i = 0; i < side; ++i)
-           for (int j = 0; j < side; ++j)
-             s += std::to_string(i + 0.3 * std::sin(j)) + " " + std::to_string(j) + " 0\n";
+         std::string s = sheet_xyz(n);
          std::uint64_t state = 7;
          auto uniform = [&state] {
            state = state * 6364136223846793005ull + 1442695040888963407ull;
@@ -160,11 +164,7 @@ std::vector<Case> cases() {
        }},
       {"fans: sheet + outlier at 1e20", 40000,
        [](std::size_t n, const fs::path& d) {
-         std::string s;
-         const int side = static_cast<int>(std::sqrt(static_cast<double>(n)));
-         for (int i = 0; i < side; ++i)
-           for (int j = 0; j < side; ++j)
-             s += std::to_string(i + 0.3 * std::sin(j)) + " " + std::to_string(j) + " 0\n";
+         std::string s = sheet_xyz(n);
          s += "1e20 0 0\n";
          write_text(d / "far.xyz", s);
          return std::vector<std::string>{"fans", (d / "far.xyz").string(), "--out",
