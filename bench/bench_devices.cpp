@@ -50,6 +50,7 @@ class BenchCamera final : public drivers::Camera {
     }
   }
   void flush() override {}
+  void set_exposure(int exposure_100us) override { cam_->set_exposure_gain(exposure_100us / 150.0); }
   drivers::CameraDescriptor descriptor() const override {
     drivers::CameraDescriptor d;
     d.width = cam_->options().width;

@@ -35,6 +35,10 @@ CaptureReport capture_steps(SessionWriter& session, drivers::Board& board, drive
   for (std::size_t i = session.steps_done(); i < h.step_count; ++i) {
     const double angle = h.step_angle(i);
     std::vector<drivers::Frame> frames;
+    if (options.stop_requested && options.stop_requested()) {
+      report.stopped = true;
+      break;
+    }
     if (options.before_step) options.before_step(i);
     try {
       for (int k = 0; k < h.laser_count; ++k) board.set_laser(k, false);

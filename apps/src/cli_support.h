@@ -28,6 +28,7 @@ enum ExitCode : int {
   kOutOfTolerance = 8,   //!< `scanmesh check-calibration`: a measured error exceeds its tolerance
   kMeshIncomplete = 9,   //!< `scanmesh animesh`: written, but with open fronts or failing its check
   kRequirementNotMet = 10,  //!< `scanmesh check --require`: a required property does not hold
+  kStopped = 11,  //!< `scanmesh scan`: stopped on request (SIGINT/SIGTERM); --resume continues
 };
 
 //! Numeric option checks. Unlike CLI11's Range / PositiveNumber / NonNegativeNumber they refuse

@@ -2,7 +2,9 @@
 // real or simulated devices, resumable), `scanmesh replay` (verify and export a session).
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <csignal>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -57,6 +59,14 @@ struct ReplayArgs {
   int sheet_columns = 10;
 };
 
+// Ctrl-C or SIGTERM (the web UI's pause and stop) during a scan: finish the step in flight,
+// then end with every complete step kept and the lasers off. A second signal ends at once.
+std::atomic<bool> g_stop_requested{false};
+extern "C" void request_scan_stop(int signal_number) {
+  g_stop_requested = true;
+  std::signal(signal_number, SIG_DFL);
+}
+
 std::vector<std::string> tty_nodes() {
   std::vector<std::string> nodes;
   std::error_code ec;
@@ -108,13 +118,6 @@ int run_devices() {
   if (ttys.empty()) say() << "  (none)\n";
   for (const auto& t : ttys) say() << "  " << t << "\n";
   return kSuccess;
-}
-
-std::unique_ptr<drivers::Transport> open_board_transport(const std::string& board, int baud) {
-  if (board.starts_with("/")) return drivers::open_serial_transport(board, baud);
-  drivers::UsbSerialOptions o = drivers::parse_usb_board_spec(board);
-  o.baud = baud;
-  return drivers::open_usb_transport(o);
 }
 
 // Every numeric option of `scan`, checked before a device is opened (exit 3 naming the option).
@@ -293,15 +296,28 @@ int run_scan(const ScanArgs& a) {
   options.progress = [&](std::size_t done, std::size_t total) {
     progress.update(static_cast<int>(done), static_cast<int>(total));
   };
+  options.stop_requested = [] { return g_stop_requested.load(); };
+  g_stop_requested = false;
+  std::signal(SIGINT, request_scan_stop);
+  std::signal(SIGTERM, request_scan_stop);
   const CaptureReport report = capture_steps(*session, board, *camera, options);
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
   progress.finish();
+  result()["session"] = out.string();
+  result()["steps_done"] = report.steps_done;
+  result()["steps_planned"] = planned_steps;
+  result()["stopped"] = report.stopped;
+  if (report.stopped) {
+    say() << "scan: stopped on request after step " << report.steps_done << " of " << planned_steps
+          << "; 'scanmesh scan --resume --out " << out.string() << "' continues\n";
+    return kStopped;
+  }
   say() << "scan: " << report.steps_done << " steps (" << report.steps_done - report.first_step
         << " captured now";
   if (report.first_step > 0) say() << ", resumed at step " << report.first_step;
   say() << ") in " << report.seconds << " s, " << report.dropped_frames << " frames dropped -> "
         << out.string() << "\n";
-  result()["session"] = out.string();
-  result()["steps_done"] = report.steps_done;
   result()["captured_now"] = report.steps_done - report.first_step;
   result()["first_step"] = report.first_step;
   result()["seconds"] = report.seconds;

@@ -5,6 +5,8 @@
 #include <thread>
 
 #include "scanmesh/core/errors.h"
+#include "scanmesh/drivers/serial_transport.h"
+#include "scanmesh/drivers/usb_transport.h"
 #include "scanmesh/sim/scene.h"
 #include "scanmesh/sim/turntable_camera.h"
 
@@ -94,6 +96,22 @@ drivers::CameraDescriptor SimCameraSource::descriptor() const {
   d.fps = o.fps;
   return d;
 }
+
+void SimCameraSource::set_exposure(int exposure_100us) {
+  if (exposure_100us < 1 || exposure_100us > 100 * kSimNominalExposure)
+    throw DeviceError("sim:camera", "exposure " + std::to_string(exposure_100us) +
+                                        " out of range 1.." +
+                                        std::to_string(100 * kSimNominalExposure));
+  camera_->set_exposure_gain(static_cast<double>(exposure_100us) / kSimNominalExposure);
+}
+
+std::unique_ptr<drivers::Transport> open_board_transport(const std::string& board, int baud) {
+  if (board.starts_with("/")) return drivers::open_serial_transport(board, baud);
+  drivers::UsbSerialOptions o = drivers::parse_usb_board_spec(board);
+  o.baud = baud;
+  return drivers::open_usb_transport(o);
+}
+
 
 drivers::Frame SimCameraSource::grab() {
   const auto sim_format = format_ == drivers::PixelFormat::Yuyv    ? sim::SimPixelFormat::Yuyv

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "scanmesh/drivers/camera.h"
+#include "scanmesh/drivers/transport.h"
 #include "scanmesh/sim/pty_board.h"
 #include "scanmesh/sim/sim_camera.h"
 #include "scanmesh/sim/turntable_camera.h"
@@ -33,6 +34,13 @@ sim::RigConfig scaled_ciclop_rig(int width, int height);
 //! (The scene renderer sim::TurntableCamera plugs in here.)
 sim::FrameRenderer make_sim_renderer(const std::string& scene, int width, int height);
 
+//! The board's transport for `--board`: a tty path (/dev/ttyACM0), or VID:PID / usb:BUS:ADDR
+//! through libusb. Throws DeviceError.
+std::unique_ptr<drivers::Transport> open_board_transport(const std::string& board, int baud);
+
+//! The exposure (100 µs units) at which the simulated camera's frames look as rendered.
+constexpr int kSimNominalExposure = 150;
+
 //! drivers::Camera over a SimCamera, decoding with the same code as the V4L2 backend.
 class SimCameraSource final : public drivers::Camera {
  public:
@@ -41,6 +49,8 @@ class SimCameraSource final : public drivers::Camera {
   drivers::Frame grab() override;
   void flush() override {}
   drivers::CameraDescriptor descriptor() const override;
+  //! Exposure relative to kSimNominalExposure (the renderer's brightness).
+  void set_exposure(int exposure_100us) override;
 
  private:
   std::shared_ptr<sim::SimCamera> camera_;

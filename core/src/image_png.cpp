@@ -58,7 +58,7 @@ void flip_rows(Image8& image) {
                      image.pixels.begin() + static_cast<std::ptrdiff_t>(bottom * row));
 }
 
-void write_png(const std::filesystem::path& path, const Image8& image) {
+std::vector<std::uint8_t> encode_png(const Image8& image, const std::filesystem::path& path) {
   if (!supported_channels(image.channels) || image.width <= 0 || image.height <= 0 ||
       image.pixels.size() != static_cast<std::size_t>(image.width) * image.height * image.channels)
     throw InvalidInputError(
@@ -80,7 +80,12 @@ void write_png(const std::filesystem::path& path, const Image8& image) {
   if (!png_image_write_to_memory(&png, buffer.data(), &size, 0, image.pixels.data(), 0, nullptr))
     throw IoError("cannot encode PNG '" + path.string() + "': " + png.message);
   buffer.resize(size);
-  write_file_atomically(path, std::span<const std::uint8_t>(buffer));
+  return buffer;
+}
+
+void write_png(const std::filesystem::path& path, const Image8& image) {
+  const std::vector<std::uint8_t> bytes = encode_png(image, path);
+  write_file_atomically(path, std::span<const std::uint8_t>(bytes));
 }
 
 Image8 read_png(const std::filesystem::path& path) {

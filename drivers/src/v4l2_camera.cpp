@@ -167,6 +167,11 @@ void V4l2Camera::fail(const std::string& what, int err) const {
   throw DeviceError(path_, what + ": " + std::strerror(err));
 }
 
+void V4l2Camera::set_exposure(int exposure_100us) {
+  set_control(V4L2_CID_EXPOSURE_AUTO, V4L2_EXPOSURE_MANUAL, "auto exposure off");
+  set_control(V4L2_CID_EXPOSURE_ABSOLUTE, exposure_100us, "exposure");
+}
+
 void V4l2Camera::set_control(std::uint32_t id, std::int32_t value, const char* what) {
   v4l2_control c{};
   c.id = id;
@@ -221,10 +226,7 @@ void V4l2Camera::configure(const CameraSettings& s) {
                       parm.parm.capture.timeperframe.numerator;
 
   // A laser scanner needs a fixed exposure: automatic exposure would dim the laser line.
-  if (s.exposure) {
-    set_control(V4L2_CID_EXPOSURE_AUTO, V4L2_EXPOSURE_MANUAL, "auto exposure off");
-    set_control(V4L2_CID_EXPOSURE_ABSOLUTE, *s.exposure, "exposure");
-  }
+  if (s.exposure) set_exposure(*s.exposure);
   if (s.gain) {
     v4l2_control c{V4L2_CID_AUTOGAIN, 0};
     xioctl(fd_, VIDIOC_S_CTRL, &c);  // many UVC cameras have no auto gain: not an error

@@ -230,5 +230,48 @@ TEST_F(ScanCli, KillNineAtFiftyProgressPointsLosesNothing) {
   fs::remove_all(dir);
 }
 
+// Ctrl-C / SIGTERM (the web UI's pause and stop): the scan ends after the step in flight with
+// exit 11 and a --resume hint; every complete step is kept and --resume completes the session
+// to the same frames as an uninterrupted scan. Waits for a progress marker, not a time.
+TEST_F(ScanCli, SigtermStopsBetweenStepsAndResumes) {
+  const std::string scan =
+      "scan --sim --steps 40 --lasers 2 --size 32x24 --time-scale 0.01 --settle 0.05";
+  const fs::path dir = scratch("stopped"), whole = scratch("whole");
+  ASSERT_EQ(run(scan + " --out " + whole.string()).exit_code, 0);
+  int pipe_fds[2];
+  ASSERT_EQ(::pipe(pipe_fds), 0);
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::dup2(pipe_fds[1], 1);
+    ::dup2(pipe_fds[1], 2);
+    ::close(pipe_fds[0]);
+    execl("/bin/sh", "sh", "-c",
+          ("exec " + test::scanmesh_binary().string() + " " + scan + " --out " + dir.string())
+              .c_str(),
+          static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  ::close(pipe_fds[1]);
+  int status = 0;
+  while (frame_entries(dir) < 4 && ::waitpid(pid, &status, WNOHANG) == 0) std::this_thread::yield();
+  ::kill(pid, SIGTERM);
+  std::string output;
+  char buffer[4096];
+  for (ssize_t n; (n = ::read(pipe_fds[0], buffer, sizeof buffer)) > 0;) output.append(buffer, n);
+  ::close(pipe_fds[0]);
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status)) << output;
+  EXPECT_EQ(WEXITSTATUS(status), 11) << output;
+  EXPECT_NE(output.find("stopped on request"), std::string::npos) << output;
+  EXPECT_NE(output.find("--resume"), std::string::npos) << output;
+  const RunResult replay = run("replay " + dir.string() + " --out " + scratch("stopped_replay").string() + " --json");
+  ASSERT_EQ(replay.exit_code, 0) << replay.output;
+  EXPECT_NE(replay.output.find("\"complete\": false"), std::string::npos) << replay.output;
+  const RunResult resumed = run(scan + " --out " + dir.string() + " --resume");
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  EXPECT_TRUE(test::sessions_identical(dir, whole));
+}
+
 }  // namespace
 }  // namespace scanmesh

@@ -8,7 +8,9 @@
 #include <poll.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
+#include <thread>
 #include <iostream>
 
 #include "board_test_support.h"
@@ -181,6 +183,42 @@ TEST(V4l2Camera, ControlsReachTheDevice) {
   EXPECT_EQ(rig.devices.camera_control(V4L2_CID_GAIN), 7);
   EXPECT_EQ(rig.devices.camera_control(V4L2_CID_BRIGHTNESS), 3);
   EXPECT_EQ(cam.grab().rgb.width, 64);
+}
+
+// The live view's exposure slider: the control changes while the camera streams.
+TEST(V4l2Camera, ExposureChangesWhileStreaming) {
+  CameraRig rig;
+  V4l2Camera cam("/dev/video0", rig.settings(PixelFormat::Rgb24));
+  EXPECT_EQ(cam.grab().rgb.width, 64);
+  cam.set_exposure(300);
+  EXPECT_EQ(rig.devices.camera_control(V4L2_CID_EXPOSURE_AUTO), V4L2_EXPOSURE_MANUAL);
+  EXPECT_EQ(rig.devices.camera_control(V4L2_CID_EXPOSURE_ABSOLUTE), 300);
+  EXPECT_EQ(cam.grab().rgb.width, 64);
+}
+
+// The simulated sensor collects light in proportion to its exposure and clips at 255.
+TEST(SimCamera, ExposureGainScalesAndClipsThePixels) {
+  CameraRig rig;
+  rig.lasers = 1;  // the laser line is bright enough to clip at twice the exposure
+  const Image8 nominal = rig.camera->render(0.3, 1);
+  rig.camera->set_exposure_gain(2.0);
+  rig.camera->start_streaming();
+  sim::SimCamera::Capture c;
+  for (int i = 0; i < 20000 && c.status != sim::SimCamera::Capture::Status::Ok; ++i) {
+    c = rig.camera->capture(sim::SimPixelFormat::Rgb24);
+    if (c.status != sim::SimCamera::Capture::Status::Ok)
+      std::this_thread::sleep_for(std::chrono::microseconds(100));
+  }
+  ASSERT_EQ(c.status, sim::SimCamera::Capture::Status::Ok);
+  ASSERT_EQ(c.bytes.size(), nominal.pixels.size());
+  int clipped = 0;
+  for (std::size_t i = 0; i < c.bytes.size(); ++i) {
+    EXPECT_EQ(c.bytes[i], std::min(255, 2 * nominal.pixels[i])) << "byte " << i;
+    clipped += 2 * nominal.pixels[i] > 255;
+  }
+  EXPECT_GT(clipped, 0);
+  EXPECT_THROW(rig.camera->set_exposure_gain(0), std::invalid_argument);
+  EXPECT_THROW(rig.camera->set_exposure_gain(1e9), std::invalid_argument);
 }
 
 TEST(V4l2Camera, WithoutSettingsNoControlIsTouched) {

@@ -114,6 +114,21 @@ void SimCamera::start_streaming() {
 
 void SimCamera::stop_streaming() {}
 
+namespace {
+// The renderer draws the scene at the nominal exposure; a longer exposure collects
+// proportionally more light, clipped at the sensor's full well (255), as a real sensor does.
+void apply_exposure(Image8& img, double gain) {
+  if (gain == 1.0) return;
+  for (auto& v : img.pixels) v = static_cast<std::uint8_t>(std::min(255.0, v * gain + 0.5));
+}
+}  // namespace
+
+void SimCamera::set_exposure_gain(double gain) {
+  if (!(gain > 0) || gain > 100) throw std::invalid_argument("exposure gain must be in (0, 100]");
+  std::lock_guard lock(mutex_);
+  exposure_gain_ = gain;
+}
+
 void SimCamera::set_faults(const CameraFaults& faults) {
   std::lock_guard lock(mutex_);
   options_.faults = faults;
@@ -155,7 +170,8 @@ SimCamera::Capture SimCamera::capture(SimPixelFormat format) {
   lock.unlock();
   c.angle_rad = angle_();
   c.laser_mask = lasers_();
-  const Image8 img = renderer_(c.angle_rad, c.laser_mask);
+  Image8 img = renderer_(c.angle_rad, c.laser_mask);
+  apply_exposure(img, exposure_gain_);
   if (img.width != options_.width || img.height != options_.height || img.channels != 3)
     throw std::logic_error("renderer returned a frame of the wrong size");
   switch (format) {

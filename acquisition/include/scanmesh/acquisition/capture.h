@@ -24,6 +24,9 @@ struct CaptureOptions {
   std::function<void(std::size_t step)> before_step;
   //! Called after each complete step with (steps done, steps total).
   std::function<void(std::size_t, std::size_t)> progress;
+  //! Asked before each step: true ends the capture there (a user's stop or pause; the lasers
+  //! are off between steps and the session holds every complete step, so it can be resumed).
+  std::function<bool()> stop_requested;
 };
 
 struct CaptureReport {
@@ -31,6 +34,7 @@ struct CaptureReport {
   std::size_t steps_done = 0;  //!< complete steps in the session now
   std::uint64_t dropped_frames = 0;
   double seconds = 0;
+  bool stopped = false;  //!< ended early by stop_requested
 };
 
 //! Captures the remaining steps of `session` with `board` (connected) and `camera`. On a device

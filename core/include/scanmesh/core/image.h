@@ -31,6 +31,9 @@ struct Image8 {
 //! Turns the image upside down (row 0 becomes the last row).
 void flip_rows(Image8& image);
 
+//! The PNG file bytes of an 8-bit image (grey, RGB or RGBA); `name` names it in errors.
+//! Throws InvalidInputError for an invalid image, IoError when libpng fails.
+std::vector<std::uint8_t> encode_png(const Image8& image, const std::filesystem::path& name);
 //! Writes an 8-bit PNG atomically. Throws IoError on failure.
 void write_png(const std::filesystem::path& path, const Image8& image);
 //! Reads an 8-bit grey/RGB/RGBA PNG (16-bit and palette images are converted to 8-bit).

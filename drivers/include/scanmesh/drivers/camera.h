@@ -51,6 +51,9 @@ class Camera {
   //! the new state.
   virtual void flush() = 0;
   virtual CameraDescriptor descriptor() const = 0;
+  //! Manual exposure in 100 µs units, while streaming (the live view's slider). Throws
+  //! DeviceError when the device refuses it.
+  virtual void set_exposure(int exposure_100us) = 0;
 };
 
 enum class IoMethod { Mmap, UserPtr };
@@ -89,6 +92,7 @@ class V4l2Camera final : public Camera {
   Frame grab() override;
   void flush() override;
   CameraDescriptor descriptor() const override { return descriptor_; }
+  void set_exposure(int exposure_100us) override;
   const CameraInfo& info() const { return info_; }
   //! Frames lost to sequence gaps since streaming started.
   std::uint64_t dropped_frames() const { return dropped_; }

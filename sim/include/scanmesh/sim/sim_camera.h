@@ -83,6 +83,9 @@ class SimCamera {
 
   const SimCameraOptions& options() const { return options_; }
   void set_faults(const CameraFaults& faults);
+  //! Exposure relative to the nominal one the renderer draws (1: as rendered); pixel values
+  //! scale with it and clip at 255. Throws std::invalid_argument outside (0, 100].
+  void set_exposure_gain(double gain);
   bool unplugged() const;
   std::uint32_t frames_delivered() const;
 
@@ -96,6 +99,7 @@ class SimCamera {
   std::uint32_t sequence_ = 0;
   std::uint32_t delivered_ = 0;
   bool unplugged_ = false;
+  double exposure_gain_ = 1.0;
 };
 
 }  // namespace scanmesh::sim
