@@ -192,3 +192,8 @@ void register_aft_commands(CLI::App& app, CommandList& commands);
 namespace scanmesh::cli {
 void register_remesh_commands(CLI::App& app, CommandList& commands);
 }  // namespace scanmesh::cli
+
+// --- the web UI: apps/src/serve/ ---
+namespace scanmesh::cli {
+void register_serve_commands(CLI::App& app, CommandList& commands);
+}  // namespace scanmesh::cli

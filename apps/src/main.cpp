@@ -222,6 +222,7 @@ int main(int argc, char** argv) {
   register_devices_commands(app, commands);
   register_aft_commands(app, commands);
   register_remesh_commands(app, commands);
+  register_serve_commands(app, commands);
   register_measure_commands(app, commands);
   register_import_commands(app, commands);
   add_output_flags(app);  // --json and --quiet on every subcommand (docs/cli.md, "Output")

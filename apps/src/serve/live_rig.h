@@ -1,0 +1,74 @@
+// The live view of `scanmesh serve`: the camera and the turntable board held open between jobs,
+// a frame on request with the extracted laser peaks drawn over it, and the controls that act on
+// the drivers (exposure, laser, table). Real devices (V4L2 + libusb/tty) or the simulated ones
+// behind the same driver code (the pty board, the simulated UVC camera). A scan or calibration
+// job needs the devices itself: release() closes them, the next frame() opens them again.
+#pragma once
+
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "scanmesh/acquisition/line_extraction.h"
+
+namespace scanmesh::drivers {
+class Board;
+class Camera;
+}  // namespace scanmesh::drivers
+namespace scanmesh::sim {
+class PtyBoard;
+class SimCamera;
+}  // namespace scanmesh::sim
+
+namespace scanmesh::cli::web {
+
+struct DeviceChoice {
+  bool sim = false;
+  std::string camera, board;  //!< hardware: as `scan --device/--board`
+  int baud = 115200;
+  int width = 640, height = 480;
+  std::string format;  //!< empty: rgb24 in simulation, yuyv on hardware
+};
+
+struct LiveFrame {
+  std::vector<std::uint8_t> png;  //!< the laser-on frame (laser-off with laser -1), peaks drawn
+  std::size_t peaks = 0;
+  std::size_t saturated = 0;
+  double angle_deg = 0;
+};
+
+class LiveRig {
+ public:
+  explicit LiveRig(DeviceChoice devices);
+  ~LiveRig();
+  LiveRig(const LiveRig&) = delete;
+  LiveRig& operator=(const LiveRig&) = delete;
+
+  //! Opens the devices if needed and takes a frame pair. Throws DeviceError.
+  LiveFrame frame();
+  //! Applies the page's settings: {"exposure": int, "threshold": DN, "method": name,
+  //! "laser": -1|0|1}. Throws InvalidInputError naming a bad field (nothing is changed then).
+  void apply(const nlohmann::json& settings);
+  //! Turns the table by `degrees` (live positioning before a scan). Throws DeviceError.
+  void turn(double degrees);
+  //! Closes the devices (a job is about to open them).
+  void release();
+  nlohmann::json describe() const;
+
+ private:
+  void open_locked();
+  DeviceChoice devices_;
+  mutable std::mutex mutex_;
+  std::unique_ptr<sim::PtyBoard> pty_;
+  std::shared_ptr<sim::SimCamera> sim_camera_;
+  std::unique_ptr<drivers::Camera> camera_;
+  std::unique_ptr<drivers::Board> board_;
+  int exposure_ = 0;  //!< 0: the camera's own until the page sets one
+  int laser_ = 0;     //!< -1: none
+  LineExtractionOptions line_;
+};
+
+}  // namespace scanmesh::cli::web
