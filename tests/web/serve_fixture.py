@@ -18,9 +18,9 @@ SCANMESH = os.environ.get("SCANMESH_BIN", "scanmesh")
 
 
 class Server:
-    def __init__(self, *args, size="320x240"):
+    def __init__(self, *args, size="320x240", devices=("--sim",)):
         self.data = tempfile.mkdtemp(prefix="scanmesh_serve_test_")
-        cmd = [SCANMESH, "serve", "--sim", "--size", size, "--port", "0",
+        cmd = [SCANMESH, "serve"] + list(devices) + ["--size", size, "--port", "0",
                "--data", os.path.join(self.data, "d")] + list(args)
         self.process = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         line = self.process.stdout.readline()

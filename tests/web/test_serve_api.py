@@ -202,6 +202,18 @@ class ServeRemote(unittest.TestCase):
             self.assertEqual(server.stop(), 0)
             server.cleanup()
 
+    def test_missing_hardware_is_a_clear_503_not_a_crash(self):
+        server = Server(devices=("--device", "/dev/video-scanmesh-none", "--board", "/dev/ttyACM-scanmesh-none"))
+        try:
+            status, body, _ = server.request("/api/live/frame")
+            self.assertEqual(status, 503)
+            self.assertIn("/dev/video-scanmesh-none", body["error"])
+            self.assertEqual(server.request("/api/status")[0], 200)  # still serving
+            self.assertEqual(server.request("/api/live/turn", {"degrees": 10})[0], 503)
+        finally:
+            self.assertEqual(server.stop(), 0)
+            server.cleanup()
+
     def test_stopping_the_server_mid_scan_keeps_the_session(self):
         server = Server()
         try:
