@@ -147,6 +147,7 @@ class WebApp {
   explicit WebApp(const ServeOptions& options);
   int run();
   void shutdown() { server_.stop(); }
+  bool running() const { return server_.is_running(); }
 
  private:
   void install_routes();
@@ -731,10 +732,10 @@ void WebApp::save_lines(const nlohmann::json& body, Response& res) {
             res, false);
 }
 
-std::atomic<WebApp*> g_app{nullptr};
-extern "C" void stop_serving(int) {
-  if (WebApp* app = g_app.load()) app->shutdown();
-}
+// SIGINT/SIGTERM only set this flag (async-signal-safe); a watcher thread stops the server. A
+// signal that arrives before the server listens is not lost: the watcher waits for it to run.
+std::atomic<bool> g_stop_requested{false};
+extern "C" void request_serve_stop(int) { g_stop_requested = true; }
 
 }  // namespace
 
@@ -744,11 +745,26 @@ int run_serve(const ServeOptions& options) {
   // errors to handle, not signals that end the server.
   std::signal(SIGPIPE, SIG_IGN);
   WebApp app(options);
-  g_app = &app;
-  std::signal(SIGINT, stop_serving);
-  std::signal(SIGTERM, stop_serving);
-  const int code = app.run();
-  g_app = nullptr;
+  g_stop_requested = false;
+  std::signal(SIGINT, request_serve_stop);
+  std::signal(SIGTERM, request_serve_stop);
+  std::atomic<bool> finished{false};
+  std::thread watcher([&] {
+    while (!finished) {
+      if (g_stop_requested && app.running()) app.shutdown();
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  });
+  int code = kInternalError;
+  try {
+    code = app.run();
+  } catch (...) {
+    finished = true;
+    watcher.join();
+    throw;
+  }
+  finished = true;
+  watcher.join();
   return code;
 }
 
