@@ -241,7 +241,8 @@ async function liveLoop() {
       $('live-img').src = URL.createObjectURL(blob);
       if (old.startsWith('blob:')) URL.revokeObjectURL(old);
       $('live-info').textContent = 'table ' + Number(response.headers.get('X-Angle')).toFixed(1) + '°, ' +
-        response.headers.get('X-Peaks') + ' laser peaks (' + response.headers.get('X-Saturated') + ' saturated)';
+        response.headers.get('X-Peaks') + ' laser peaks (' + response.headers.get('X-Saturated') + ' saturated), mean level ' +
+        Number(response.headers.get('X-Mean-Level')).toFixed(1);
       showError('live-error', null);
     } catch (e) { showError('live-error', e); }
     liveBusy = false;

@@ -13,7 +13,9 @@ from serve_fixture import SCANMESH, Server, run_cli
 class ServeApi(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
-        cls.server = Server()
+        # The fast synthetic line pattern on the table: this test also runs under the sanitizers,
+        # where rendering the head takes minutes (the browser test scans the head).
+        cls.server = Server("--scene", "synthetic")
 
     @classmethod
     def tearDownClass(cls):
@@ -45,12 +47,14 @@ class ServeApi(unittest.TestCase):
         status, png, h = self.server.request("/api/live/frame")
         self.assertEqual(status, 200)
         self.assertEqual(png[:8], b"\x89PNG\r\n\x1a\n")
-        normal_peaks, normal_saturated = int(h["X-Peaks"]), int(h["X-Saturated"])
+        normal_peaks, normal_level = int(h["X-Peaks"]), float(h["X-Mean-Level"])
         self.assertGreater(normal_peaks, 50)
-        # A 4x longer exposure saturates more of the line (the sensor clips at 255).
-        self.post("/api/live/settings", {"exposure": 600})
+        self.assertGreater(normal_level, 1)
+        # Twice the exposure: the sensor collects twice the light (less where it clips at 255).
+        self.post("/api/live/settings", {"exposure": 300})
         _, _, h = self.server.request("/api/live/frame")
-        self.assertGreater(int(h["X-Saturated"]), normal_saturated)
+        self.assertGreater(float(h["X-Mean-Level"]), 1.5 * normal_level)
+        self.assertLessEqual(float(h["X-Mean-Level"]), 2 * normal_level + 0.5)
         # A threshold above every peak's height: no peaks; laser off: no peaks either.
         self.post("/api/live/settings", {"exposure": 150, "threshold": 255})
         self.assertEqual(int(self.server.request("/api/live/frame")[2]["X-Peaks"]), 0)
@@ -85,6 +89,7 @@ class ServeApi(unittest.TestCase):
             ("/api/scan/resume", {"session": "missing"}, 404),
             ("/api/sessions/replay", {"session": "missing"}, 404),
             ("/api/calibration/start", {"poses": 9}, 400),
+            ("/api/calibration/start", {"check": "yes"}, 400),
             ("/api/lines", {"grid": "../../etc/passwd", "lines": []}, 403),
             ("/api/lines", {"grid": "nothing.smg", "lines": []}, 404),
             ("/api/animesh", {"grid": "/etc/passwd"}, 403),
@@ -160,19 +165,18 @@ class ServeApi(unittest.TestCase):
         self.assertEqual(self.post("/api/scan/start", {"name": "paused"})[0], 409)
 
     def test_z_calibration_stopped_and_resumed_still_calibrates(self):
-        self.assertEqual(self.post("/api/calibration/start", {"name": "cal", "poses": 2})[0], 202)
+        self.assertEqual(self.post("/api/calibration/start", {"name": "cal", "poses": 1, "check": False})[0], 202)
         self.server.wait_job(until=lambda s: s.get("job_session", {}).get("steps_done", 0) >= 3)
         self.post("/api/job/stop", {})
         s = self.server.wait_job()
         self.assertEqual(s["job"]["state"], "stopped", s["job"])
         self.assertFalse(os.path.exists(os.path.join(self.server.data_dir, "calibration.yaml")))
-        self.assertEqual(self.post("/api/scan/resume", {"session": "cal"})[0], 202)
+        self.assertEqual(self.post("/api/scan/resume", {"session": "cal", "check": False})[0], 202)
         s = self.server.wait_job()
         self.assertEqual(s["job"]["kind"], "calibration")
         self.assertEqual(s["job"]["state"], "succeeded", s["job"])
         argv = [c["argv"][0] for c in s["job"]["commands"]]
-        self.assertEqual(argv, ["scan", "calibrate", "check-calibration"])
-        self.assertIn(s["job"]["commands"][2]["exit_code"], (0, 8))  # a verdict either way
+        self.assertEqual(argv, ["scan", "calibrate"])
         self.assertTrue(os.path.exists(os.path.join(self.server.data_dir, "calibration.yaml")))
         self.assertTrue(self.server.status()["calibration"]["exists"])
 
@@ -215,7 +219,7 @@ class ServeRemote(unittest.TestCase):
             server.cleanup()
 
     def test_stopping_the_server_mid_scan_keeps_the_session(self):
-        server = Server()
+        server = Server("--scene", "synthetic")
         try:
             self.assertEqual(server.request("/api/scan/start", {"name": "cut", "steps": 60})[0], 202)
             server.wait_job(until=lambda s: s.get("job_session", {}).get("steps_done", 0) >= 2)

@@ -1,5 +1,6 @@
 // `scanmesh serve`: the local web UI (docs/ui.md).
 #include <CLI/CLI.hpp>
+#include <filesystem>
 
 #include "cli_support.h"
 #include "scanmesh/core/errors.h"
@@ -22,6 +23,10 @@ void register_serve_commands(CLI::App& app, CommandList& commands) {
   serve->add_option("--size", *size, "Frame size WIDTHxHEIGHT of live view, scans and calibration")
       ->capture_default_str();
   serve->add_option("--format", o->devices.format, "Camera format: yuyv | mjpeg | rgb24");
+  serve->add_option("--scene", o->devices.scene,
+                    "--sim: what stands on the table: head, a scene YAML, or synthetic (a fast "
+                    "line pattern)")
+      ->capture_default_str();
   serve->add_option("--port", o->port, "TCP port (0: any free port)")->capture_default_str()
       ->check(in_range(0, 65535));
   serve->add_option("--host", o->host,
@@ -46,6 +51,11 @@ void register_serve_commands(CLI::App& app, CommandList& commands) {
                         if (!o->devices.sim && (o->devices.camera.empty() || o->devices.board.empty()))
                           throw InvalidInputError("real devices need --device CAM and --board BOARD");
                         std::tie(o->devices.width, o->devices.height) = parse_frame_size(*size);
+                        if (o->devices.scene == "synthetic") o->devices.scene.clear();
+                        if (!o->devices.scene.empty() && o->devices.scene != "head" &&
+                            !std::filesystem::is_regular_file(o->devices.scene))
+                          throw InvalidInputError("--scene '" + o->devices.scene +
+                                                  "' is neither head, synthetic nor a scene file");
                         return web::run_serve(*o);
                       }});
 }

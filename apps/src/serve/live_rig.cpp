@@ -58,7 +58,7 @@ void LiveRig::open_locked() {
     co.height = devices_.height;
     co.time_scale = kSimLiveTimeScale;
     sim_camera_ = std::make_shared<sim::SimCamera>(
-        make_sim_renderer("head", devices_.width, devices_.height),
+        make_sim_renderer(devices_.scene, devices_.width, devices_.height),
         [firmware] { return firmware->angle_rad(); }, [firmware] { return firmware->laser_mask(); },
         co);
     sim_camera_->start_streaming();
@@ -93,6 +93,9 @@ LiveFrame LiveRig::frame() {
   LiveFrame out;
   for (int k = 0; k < 2; ++k) board_->set_laser(k, false);
   drivers::Frame off = grab_fresh(*camera_);
+  double sum = 0;
+  for (std::uint8_t v : off.rgb.pixels) sum += v;
+  out.mean_level = off.rgb.pixels.empty() ? 0 : sum / static_cast<double>(off.rgb.pixels.size());
   Image8 shown = off.rgb;
   if (laser_ >= 0) {
     board_->set_laser(laser_, true);

@@ -31,12 +31,16 @@ struct DeviceChoice {
   int baud = 115200;
   int width = 640, height = 480;
   std::string format;  //!< empty: rgb24 in simulation, yuyv on hardware
+  //! Simulation: what stands on the turntable: "head", a scene YAML, or "" for the fast
+  //! synthetic line pattern (the tests under the sanitizers).
+  std::string scene = "head";
 };
 
 struct LiveFrame {
   std::vector<std::uint8_t> png;  //!< the laser-on frame (laser-off with laser -1), peaks drawn
   std::size_t peaks = 0;
   std::size_t saturated = 0;
+  double mean_level = 0;  //!< mean grey level of the laser-off frame (0..255): the exposure
   double angle_deg = 0;
 };
 

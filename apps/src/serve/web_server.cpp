@@ -167,6 +167,7 @@ class WebApp {
     bool calibration = false;
     int poses = 3;
     bool resume = false;
+    bool check = true;  //!< calibration on the simulator: check-calibration after it
   };
   std::vector<CommandLine> capture_commands(const fs::path& session, const Capture& capture) const;
   nlohmann::json session_summary(const fs::path& folder) const;
@@ -509,6 +510,7 @@ void WebApp::live_frame(Response& res) {
   res.set_header("X-Peaks", std::to_string(f.peaks));
   res.set_header("X-Saturated", std::to_string(f.saturated));
   res.set_header("X-Angle", std::to_string(f.angle_deg));
+  res.set_header("X-Mean-Level", std::to_string(f.mean_level));
   res.set_header("Cache-Control", "no-store");
   res.set_content(reinterpret_cast<const char*>(f.png.data()), f.png.size(), "image/png");
 }
@@ -530,7 +532,8 @@ std::vector<CommandLine> WebApp::capture_commands(const fs::path& session, const
     if (!c.resume) scan.insert(scan.end(), {"--poses", std::to_string(c.poses)});
   } else {
     scan.insert(scan.end(), {"--steps", std::to_string(c.steps)});
-    if (options_.devices.sim) scan.insert(scan.end(), {"--scene", "head"});
+    if (options_.devices.sim && !options_.devices.scene.empty())
+      scan.insert(scan.end(), {"--scene", options_.devices.scene});
   }
   const auto device = scan_device_args();
   scan.insert(scan.end(), device.begin(), device.end());
@@ -541,7 +544,7 @@ std::vector<CommandLine> WebApp::capture_commands(const fs::path& session, const
     // with the same camera; on hardware the user records those artefacts as ordinary scans and
     // runs check-calibration on them (docs/ui.md).
     const DeviceChoice& d = options_.devices;
-    if (d.sim)
+    if (d.sim && c.check)
       commands.push_back({"check-calibration", "--sim", "--calib", calibration_file().string(),
                           "--size", std::to_string(d.width) + "x" + std::to_string(d.height),
                           "--report", (data_ / "check-calibration.json").string()});
@@ -569,9 +572,12 @@ void WebApp::resume_scan(const nlohmann::json& body, Response& res) {
   const fs::path session = sessions_dir() / name;
   if (!fs::exists(session / "session.json")) throw HttpError(404, "no session '" + name + "'");
   const SessionManifest m = read_session_manifest(session);
+  if (body.contains("check") && !body["check"].is_boolean())
+    throw HttpError(400, "'check' must be true or false");
   const Capture capture{.steps = static_cast<int>(m.header.step_count),
                         .calibration = m.header.calibration.has_value(),
-                        .resume = true};
+                        .resume = true,
+                        .check = body.value("check", true)};
   start_job({capture.calibration ? "calibration" : "scan", capture_commands(session, capture),
              name, {{"steps", capture.steps}, {"out", "results/" + name}, {"resumed", true}}},
             res, true);
@@ -582,9 +588,13 @@ void WebApp::start_calibration(const nlohmann::json& body, Response& res) {
       checked_name(body.contains("name") ? string_field(body, "name")
                                          : "calibration-" + std::to_string(::time(nullptr)));
   const int poses = int_field(body, "poses", 3, 1, 5);
+  if (body.contains("check") && !body["check"].is_boolean())
+    throw HttpError(400, "'check' must be true or false");
+  const bool check = body.value("check", true);
   const fs::path session = sessions_dir() / name;
   if (fs::exists(session)) throw HttpError(409, "session '" + name + "' exists");
-  start_job({"calibration", capture_commands(session, {.calibration = true, .poses = poses}), name,
+  start_job({"calibration",
+             capture_commands(session, {.calibration = true, .poses = poses, .check = check}), name,
              {{"poses", poses}}},
             res, true);
 }
