@@ -4,7 +4,7 @@
 'use strict';
 
 const $ = (id) => document.getElementById(id);
-const state = { status: null, tab: 'live', scanSession: null, pointsFrom: 0, shownJob: null,
+const state = { status: null, tab: 'live', scanSession: null, pointsFrom: 0, shownJob: null, scanXyz: [], scanRgb: [],
   lines: [], current: null, texture: null, grid: null, meshGeometry: null };
 
 // ---------------------------------------------------------------------------------------------
@@ -19,6 +19,11 @@ async function api(path, body) {
   try { data = JSON.parse(text); } catch (e) { data = { error: text }; }
   if (!response.ok) throw new Error((data && data.error) || ('HTTP ' + response.status));
   return data;
+}
+
+// Text from files, devices and other programs goes into HTML only escaped.
+function esc(text) {
+  return String(text).replace(/[&<>"']/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;', "'": '&#39;' }[c]));
 }
 
 function showError(id, error) { $(id).textContent = error ? String(error.message || error) : ''; }
@@ -201,8 +206,11 @@ async function poll() {
     $('job-stop').disabled = !(job.state === 'running');
     updateScan(s);
     updateCalibration(s);
-    if (state.shownJob !== job.id + job.state && job.state !== 'running' && job.state !== 'stopping') {
-      state.shownJob = job.id + job.state;
+    const key = job.id + job.state;
+    if (state.shownJob === null) {
+      state.shownJob = key;  // a job that ended before the page loaded is not acted on
+    } else if (state.shownJob !== key && job.state !== 'running' && job.state !== 'stopping') {
+      state.shownJob = key;
       jobFinished(job);
     }
   } catch (e) {
@@ -256,10 +264,10 @@ async function refreshDevices() {
   try {
     const d = await api('/api/devices');
     const live = d.in_use;
-    let html = '<b>in use:</b> camera ' + live.camera + ', board ' + live.board + ' (' + live.width + '×' + live.height + ')' +
-      (live.firmware ? ', firmware “' + live.firmware + '”' : '') + '<br><b>cameras found:</b> ';
-    html += d.cameras.length ? d.cameras.map((c) => c.path + ' “' + c.card + '”').join(', ') : 'none';
-    html += '<br><b>USB boards found:</b> ' + (d.usb_boards.length ? d.usb_boards.map((b) => b.id + ' ' + b.kind).join(', ') : 'none');
+    let html = '<b>in use:</b> camera ' + esc(live.camera) + ', board ' + esc(live.board) + ' (' + live.width + '×' + live.height + ')' +
+      (live.firmware ? ', firmware “' + esc(live.firmware) + '”' : '') + '<br><b>cameras found:</b> ';
+    html += d.cameras.length ? d.cameras.map((c) => esc(c.path) + ' “' + esc(c.card) + '”').join(', ') : 'none';
+    html += '<br><b>USB boards found:</b> ' + (d.usb_boards.length ? d.usb_boards.map((b) => esc(b.id + ' ' + b.kind)).join(', ') : 'none');
     $('devices').innerHTML = html;
     $('live-exposure').value = live.exposure; $('live-exposure-v').textContent = ' ' + live.exposure;
     $('live-threshold').value = live.threshold; $('live-threshold-v').textContent = ' ' + live.threshold;
@@ -307,13 +315,15 @@ $('scan-resume').addEventListener('click', async () => {
   try { await api('/api/scan/resume', { session: state.scanSession }); showError('scan-error', null); } catch (e) { showError('scan-error', e); }
 });
 
-let pointsBusy = false;
+let pointsBusy = null;  // the session whose points are being fetched
 async function fetchPoints(done) {
-  if (pointsBusy || !state.scanSession || !state.status.calibration.exists) return;
-  pointsBusy = true;
+  const session = state.scanSession;
+  if (pointsBusy === session || !session || !state.status.calibration.exists) return;
+  pointsBusy = session;
   try {
     while (state.pointsFrom < done) {
-      const p = await api('/api/scan/points?session=' + encodeURIComponent(state.scanSession) + '&from=' + state.pointsFrom);
+      const p = await api('/api/scan/points?session=' + encodeURIComponent(session) + '&from=' + state.pointsFrom);
+      if (state.scanSession !== session) return;  // another scan started meanwhile
       state.scanXyz.push(...p.xyz); state.scanRgb.push(...p.rgb);
       state.pointsFrom = p.to;
       if (p.to <= p.from) break;
@@ -323,8 +333,7 @@ async function fetchPoints(done) {
     viewers.scan.show(cloud);
     if (first && state.scanXyz.length) { cloud.geometry.computeBoundingBox(); viewers.scan.frame(cloud.geometry.boundingBox); }
     $('scan-info').textContent = (state.scanXyz.length / 3) + ' points from ' + state.pointsFrom + ' steps';
-  } catch (e) { showError('scan-error', e); }
-  pointsBusy = false;
+  } catch (e) { showError('scan-error', e); } finally { if (pointsBusy === session) pointsBusy = null; }
 }
 
 function updateScan(s) {
@@ -408,8 +417,8 @@ function calibrationFinished(job) {
   const r = job.commands[1].result || {}, u = r.camera_uncertainty || {};
   let html = '<table><tr><th></th><th>value</th><th>± 1σ</th></tr>';
   for (const k of ['fx', 'fy', 'cx', 'cy']) html += '<tr><td>' + k + ' (px)</td><td>' + fmt(r.camera[k], 2) + '</td><td>' + fmt(u[k], 2) + '</td></tr>';
-  for (const l of r.lasers || []) html += '<tr><td>laser ' + l.name + ' distance (mm)</td><td>' + fmt(l.distance_mm, 2) + '</td><td>' + fmt(l.distance_uncertainty_mm, 2) + '</td></tr>' +
-    '<tr><td>laser ' + l.name + ' normal (°)</td><td></td><td>' + fmt(l.normal_uncertainty_deg, 3) + '</td></tr>';
+  for (const l of r.lasers || []) html += '<tr><td>laser ' + esc(l.name) + ' distance (mm)</td><td>' + fmt(l.distance_mm, 2) + '</td><td>' + fmt(l.distance_uncertainty_mm, 2) + '</td></tr>' +
+    '<tr><td>laser ' + esc(l.name) + ' normal (°)</td><td></td><td>' + fmt(l.normal_uncertainty_deg, 3) + '</td></tr>';
   html += '<tr><td>axis point (mm)</td><td></td><td>' + fmt(r.axis_point_uncertainty_mm, 2) + '</td></tr>';
   html += '<tr><td>axis direction (°)</td><td></td><td>' + fmt(r.axis_direction_uncertainty_deg, 3) + '</td></tr></table>';
   html += 'reprojection RMS ' + fmt(r.reprojection_rms_px, 3) + ' px, laser RMS ' + fmt(r.laser_rms_mm, 3) + ' mm; ' + r.views_detected + ' views used, ' + r.views_rejected + ' rejected';
@@ -435,8 +444,8 @@ async function refreshSessions() {
     body.innerHTML = '';
     for (const s of list) {
       const tr = document.createElement('tr');
-      tr.innerHTML = '<td>' + s.name + '</td><td>' + (s.kind || '?') + '</td><td>' +
-        (s.error ? '<span class="error">' + s.error + '</span>' : s.steps_done + ' / ' + s.steps_planned) + '</td><td>' + (s.width || '') + '×' + (s.height || '') + '</td><td></td>';
+      tr.innerHTML = '<td>' + esc(s.name) + '</td><td>' + esc(s.kind || '?') + '</td><td>' +
+        (s.error ? '<span class="error">' + esc(s.error) + '</span>' : s.steps_done + ' / ' + s.steps_planned) + '</td><td>' + (s.width || '') + '×' + (s.height || '') + '</td><td></td>';
       const actions = tr.lastChild;
       const add = (label, path, body) => {
         const b = document.createElement('button');
@@ -469,9 +478,12 @@ async function refreshMeshes() {
   } catch (e) { showError('mesh-error', e); }
 }
 
+let meshRequest = 0;
 async function openMesh(rel) {
+  const request = ++meshRequest;
   try {
     const { geometry: g, texture } = await loadMesh(rel);
+    if (request !== meshRequest) return;  // a later click won
     state.meshGeometry = g; state.meshTexture = texture; state.meshPath = rel;
     showMesh(true);
     showError('mesh-error', null);
@@ -498,7 +510,7 @@ function showMesh(reframe) {
   const good = minAngle.filter((a) => a >= 30).length;
   const worst = n ? Math.min(...minAngle) : 0;
   const meanQ = n ? q.reduce((a, b) => a + b, 0) / n : 0;
-  $('mesh-stats').innerHTML = '<b>' + state.meshPath + '</b><br>' + distinctVertices(g) + ' vertices, ' + n + ' triangles<br>' +
+  $('mesh-stats').innerHTML = '<b>' + esc(state.meshPath) + '</b><br>' + distinctVertices(g) + ' vertices, ' + n + ' triangles<br>' +
     fmt(100 * good / Math.max(n, 1), 1) + ' % of triangles with min angle ≥ 30°, worst ' + fmt(worst, 2) + '°, mean q ' + fmt(meanQ, 3);
   $('mesh-legend').innerHTML = mode === 'minangle' ? 'min angle: 0° <span class="legend-bar"></span> 60°'
     : mode === 'q' ? 'q: 0 <span class="legend-bar"></span> 1' : '';
@@ -624,7 +636,13 @@ $('lines-canvas').addEventListener('mousemove', (e) => {
   state.dragged = true;
   drawLines();
 });
-window.addEventListener('mouseup', () => { if (state.drag && state.dragged) listLines(); state.drag = null; });
+window.addEventListener('mouseup', () => {
+  if (state.drag && state.dragged) listLines();
+  state.drag = null;
+  // The click that follows a drag's release on the canvas is not a new point; one elsewhere
+  // never comes, so the flag must not outlive this event.
+  setTimeout(() => { state.dragged = false; }, 0);
+});
 
 $('lines-canvas').addEventListener('click', (e) => {
   if (state.dragged) { state.dragged = false; return; }
@@ -657,7 +675,7 @@ async function animeshFinished(job) {
   const r = job.commands[0].result || {};
   if (job.state !== 'succeeded' && job.commands[0].exit_code !== 9) { showError('lines-error', job.error); return; }
   $('lines-result').innerHTML = 'animation mesh: ' + (r.vertices || '?') + ' vertices, ' + (r.faces || r.triangles || '?') + ' triangles' +
-    (job.commands[0].exit_code === 9 ? ' <span class="error">(incomplete: ' + job.error + ')</span>' : '') +
+    (job.commands[0].exit_code === 9 ? ' <span class="error">(incomplete: ' + esc(job.commands[0].error || '') + ')</span>' : '') +
     '<br><img src="' + fileUrl(job.info.out + '/render.png') + '" alt="animesh render">';
   selectTab('meshes');
   openMesh(job.info.out + '/mesh.ply');

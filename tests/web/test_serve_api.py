@@ -92,6 +92,11 @@ class ServeApi(unittest.TestCase):
             ("/api/calibration/start", {"check": "yes"}, 400),
             ("/api/lines", {"grid": "../../etc/passwd", "lines": []}, 403),
             ("/api/lines", {"grid": "nothing.smg", "lines": []}, 404),
+            ("/api/lines", {"grid": "g.smg", "lines": [{"id": "a", "kind": "line", "closed": "yes",
+                                                      "points": [[0, 0], [1, 1]]}]}, 400),
+            ("/api/lines", {"grid": "g.smg", "lines": [{"id": "a", "kind": 3, "points": [[0, 0], [1, 1]]}]}, 400),
+            ("/api/lines", {"grid": "g.smg", "lines": [{"id": "a b", "kind": "line", "points": [[0, 0], [1, 1]]}]}, 400),
+            ("/api/lines", {"grid": "g.smg", "lines": [{"id": "a", "kind": "line", "points": [[0, "x"], [1, 1]]}]}, 400),
             ("/api/animesh", {"grid": "/etc/passwd"}, 403),
             ("/api/job/stop", {}, 409),
         ]
@@ -127,7 +132,11 @@ class ServeApi(unittest.TestCase):
         status, body, _ = self.server.request("/api/status", headers={"Host": "attacker.example:80"})
         self.assertEqual(status, 403)
         self.assertIn("not this machine", body["error"])
-        self.assertEqual(self.server.request("/api/status", headers={"Host": "localhost"})[0], 200)
+        # A domain that merely starts like a loopback address (DNS rebinding) is not this machine.
+        for host in ("127.evil.example", "127.0.0.1.evil.example:80", "localhost.evil.example"):
+            self.assertEqual(self.server.request("/api/status", headers={"Host": host})[0], 403, host)
+        for host in ("localhost", "127.0.0.1:1234", "127.1.2.3", "[::1]:8080"):
+            self.assertEqual(self.server.request("/api/status", headers={"Host": host})[0], 200, host)
 
     def test_scan_pause_resume_and_one_job_at_a_time(self):
         status, job, _ = self.post("/api/scan/start", {"name": "paused", "steps": 40})
@@ -138,6 +147,7 @@ class ServeApi(unittest.TestCase):
         self.assertIn("one job at a time", answer["error"])
         self.assertEqual(self.post("/api/calibration/start", {"name": "c2"})[0], 409)
         self.assertFalse(os.path.exists(self.session_dir("second")))
+        self.assertFalse(os.path.exists(os.path.join(self.server.data_dir, "results", "second")))
         # The live view is refused while the devices record.
         self.assertEqual(self.server.request("/api/live/frame")[0], 409)
         self.server.wait_job(until=lambda s: s.get("job_session", {}).get("steps_done", 0) >= 3)

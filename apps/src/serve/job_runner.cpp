@@ -3,16 +3,18 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
-#include <spawn.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
+
+#include <filesystem>
 
 #include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cstring>
 
-extern char** environ;
+#include "scanmesh/core/errors.h"
 
 namespace scanmesh::cli::web {
 namespace {
@@ -59,6 +61,11 @@ JobRunner::~JobRunner() {
 bool JobRunner::start(JobRequest request) {
   std::lock_guard lock(mutex_);
   if (state_ == JobState::Running || state_ == JobState::Stopping) return false;
+  for (const auto& folder : request.folders) {
+    std::error_code ec;
+    std::filesystem::create_directories(folder, ec);
+    if (ec) throw IoError("cannot create '" + folder + "': " + ec.message());
+  }
   if (worker_.joinable()) worker_.join();  // the previous job's thread has ended its work
   state_ = JobState::Running;
   stop_asked_ = false;
@@ -81,7 +88,13 @@ bool JobRunner::stop() {
   stop_asked_ = true;
   state_ = JobState::Stopping;
   job_["state"] = "stopping";
-  if (child_ > 0) ::kill(child_, SIGTERM);
+  kill_at_ = std::chrono::steady_clock::now() + kKillAfter;
+  if (child_ > 0) ::kill(-child_, SIGTERM);
+  // A capture waiting at a pose prompt reads stdin: its end makes it give up.
+  if (child_stdin_ >= 0) {
+    ::close(child_stdin_);
+    child_stdin_ = -1;
+  }
   return true;
 }
 
@@ -89,6 +102,7 @@ bool JobRunner::send_line(const std::string& line) {
   std::lock_guard lock(mutex_);
   if (child_stdin_ < 0) return false;
   const std::string text = line + "\n";
+  // Non-blocking: a child that does not read its input cannot stall the server.
   return ::write(child_stdin_, text.data(), text.size()) == static_cast<ssize_t>(text.size());
 }
 
@@ -152,6 +166,8 @@ JobRunner::Outcome JobRunner::run_command(const CommandLine& command) {
       if (fd >= 0) ::close(fd);
     return o;
   }
+  // The "board placed" line is written without blocking the server (send_line).
+  ::fcntl(in[1], F_SETFL, O_NONBLOCK);
   std::vector<std::string> args{program_};
   args.insert(args.end(), command.begin(), command.end());
   args.push_back("--json");
@@ -159,38 +175,56 @@ JobRunner::Outcome JobRunner::run_command(const CommandLine& command) {
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
 
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_adddup2(&actions, in[0], STDIN_FILENO);
-  posix_spawn_file_actions_adddup2(&actions, out[1], STDOUT_FILENO);
-  posix_spawn_file_actions_adddup2(&actions, err[1], STDERR_FILENO);
-  // Nothing else of the server (its listening socket, the clients' connections) reaches the job.
-  posix_spawn_file_actions_addclosefrom_np(&actions, 3);
-  pid_t pid = -1;
-  const int rc = posix_spawn(&pid, program_.c_str(), &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
+  const pid_t parent = ::getpid();
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    // Only async-signal-safe calls until exec. Its own process group (stop() signals the group);
+    // SIGTERM when the server dies, so no job outlives it holding the devices.
+    ::setpgid(0, 0);
+    ::prctl(PR_SET_PDEATHSIG, SIGTERM);
+    if (::getppid() != parent) ::_exit(127);
+    ::dup2(in[0], STDIN_FILENO);
+    ::dup2(out[1], STDOUT_FILENO);
+    ::dup2(err[1], STDERR_FILENO);
+    // Nothing else of the server (its listening socket, the clients' connections) reaches the job.
+    ::close_range(3, ~0U, 0);
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  const int fork_errno = errno;
   ::close(in[0]);
   ::close(out[1]);
   ::close(err[1]);
-  if (rc != 0) {
-    o.err = "scanmesh: cannot start '" + program_ + "': " + std::strerror(rc);
+  if (pid < 0) {
+    o.err = "scanmesh: cannot start '" + program_ + "': " + std::strerror(fork_errno);
     for (int fd : {in[1], out[0], err[0]}) ::close(fd);
     return o;
   }
+  ::setpgid(pid, pid);  // also from here: stop() may signal the group before the child ran
   {
     std::lock_guard lock(mutex_);
     child_ = pid;
     child_stdin_ = in[1];
-    if (stop_asked_) ::kill(pid, SIGTERM);
+    if (stop_asked_) {
+      ::kill(-pid, SIGTERM);
+      ::close(child_stdin_);
+      child_stdin_ = -1;
+    }
   }
   std::array<pollfd, 2> fds{pollfd{out[0], POLLIN, 0}, pollfd{err[0], POLLIN, 0}};
   char buffer[65536];
   int open_streams = 2;
   while (open_streams > 0) {
-    if (::poll(fds.data(), fds.size(), -1) < 0) {
-      if (errno == EINTR) continue;
+    const int ready = ::poll(fds.data(), fds.size(), 200);
+    if (ready < 0 && errno != EINTR) {
+      ::kill(-pid, SIGKILL);  // cannot read its output any more: it must not block on a pipe
       break;
     }
+    {
+      std::lock_guard lock(mutex_);
+      if (stop_asked_ && std::chrono::steady_clock::now() > kill_at_) ::kill(-pid, SIGKILL);
+    }
+    if (ready <= 0) continue;
     for (std::size_t k = 0; k < fds.size(); ++k) {
       if (fds[k].fd < 0 || fds[k].revents == 0) continue;
       const ssize_t n = ::read(fds[k].fd, buffer, sizeof buffer);
@@ -204,13 +238,15 @@ JobRunner::Outcome JobRunner::run_command(const CommandLine& command) {
       }
     }
   }
+  for (auto& f : fds)
+    if (f.fd >= 0) ::close(f.fd);
   int status = 0;
   while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
   {
     std::lock_guard lock(mutex_);
     child_ = -1;
-    ::close(child_stdin_);
+    if (child_stdin_ >= 0) ::close(child_stdin_);
     child_stdin_ = -1;
   }
   if (WIFEXITED(status)) {

@@ -5,6 +5,7 @@
 // (docs/ui.md, "Jobs").
 #pragma once
 
+#include <chrono>
 #include <condition_variable>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -28,6 +29,9 @@ struct JobRequest {
   //! Exit codes that are results, not failures: a check's verdict (8: out of tolerance) or an
   //! incomplete but written animation mesh (9). The job goes on and ends "succeeded".
   std::vector<int> result_codes = {8, 9};
+  //! Output folders the commands expect; made by start() once the job is accepted, so a
+  //! refused job creates nothing.
+  std::vector<std::string> folders;
 };
 
 enum class JobState { Idle, Running, Stopping, Succeeded, Failed, Stopped };
@@ -41,11 +45,14 @@ class JobRunner {
   JobRunner(const JobRunner&) = delete;
   JobRunner& operator=(const JobRunner&) = delete;
 
-  //! Starts a job; false (and nothing started) when one runs already.
+  //! Starts a job; false (and nothing started or created) when one runs already. Throws
+  //! IoError when a folder of the request cannot be made (nothing started).
   bool start(JobRequest request);
-  //! Asks the running command to stop (SIGTERM: a scan ends after its current step, exit 11).
-  //! False when nothing runs.
+  //! Asks the running command to stop: SIGTERM (a scan ends after its current step, exit 11)
+  //! and end of its input (a pose prompt gives up); SIGKILL to its process group if it is still
+  //! there kKillAfter later. False when nothing runs.
   bool stop();
+  static constexpr std::chrono::seconds kKillAfter{15};
   //! Writes a line to the running command's stdin (a hardware calibration's "board placed").
   bool send_line(const std::string& line);
   bool busy() const;
@@ -69,8 +76,9 @@ class JobRunner {
   std::thread worker_;
   JobState state_ = JobState::Idle;
   nlohmann::json job_;  //!< what status() reports
-  pid_t child_ = -1;
+  pid_t child_ = -1;  //!< also its process group
   int child_stdin_ = -1;
+  std::chrono::steady_clock::time_point kill_at_{};
   int job_counter_ = 0;
   bool stop_asked_ = false;
 };

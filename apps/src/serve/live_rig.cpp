@@ -87,9 +87,26 @@ void LiveRig::open_locked() {
   }
 }
 
-LiveFrame LiveRig::frame() {
+void LiveRig::check_not_held_locked(const std::function<bool()>& job_running) {
+  if (held_ && job_running()) throw DevicesHeld("the devices are busy with a job");
+  held_ = false;
+}
+
+LiveFrame LiveRig::frame(const std::function<bool()>& job_running) {
   std::lock_guard lock(mutex_);
+  check_not_held_locked(job_running);
   open_locked();
+  try {
+    return frame_locked();
+  } catch (...) {
+    // A device that failed mid-frame: lasers off if the board still answers, and both closed
+    // (the next request opens them again, or reports what is wrong).
+    close_locked();
+    throw;
+  }
+}
+
+LiveFrame LiveRig::frame_locked() {
   LiveFrame out;
   for (int k = 0; k < 2; ++k) board_->set_laser(k, false);
   drivers::Frame off = grab_fresh(*camera_);
@@ -144,21 +161,43 @@ void LiveRig::apply(const nlohmann::json& s) {
   line_ = line;
 }
 
-void LiveRig::turn(double degrees) {
+void LiveRig::turn(double degrees, const std::function<bool()>& job_running) {
   if (!std::isfinite(degrees) || std::abs(degrees) > 360)
     throw InvalidInputError("turn: degrees must be in [-360, 360]");
   std::lock_guard lock(mutex_);
+  check_not_held_locked(job_running);
   open_locked();
-  board_->move_by(degrees * kPi / 180.0);
+  try {
+    board_->move_by(degrees * kPi / 180.0);
+  } catch (...) {
+    close_locked();
+    throw;
+  }
 }
 
-void LiveRig::release() {
-  std::lock_guard lock(mutex_);
+void LiveRig::close_locked() noexcept {
   if (board_) board_->shutdown();
   board_.reset();
   camera_.reset();
   sim_camera_.reset();
   pty_.reset();
+}
+
+void LiveRig::hold_for(const std::function<void()>& start_job) {
+  std::lock_guard lock(mutex_);
+  close_locked();
+  held_ = true;
+  try {
+    start_job();
+  } catch (...) {
+    held_ = false;
+    throw;
+  }
+}
+
+void LiveRig::release() {
+  std::lock_guard lock(mutex_);
+  close_locked();
 }
 
 nlohmann::json LiveRig::describe() const {

@@ -5,7 +5,9 @@
 // job needs the devices itself: release() closes them, the next frame() opens them again.
 #pragma once
 
+#include <functional>
 #include <memory>
+#include <stdexcept>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -51,19 +53,34 @@ class LiveRig {
   LiveRig(const LiveRig&) = delete;
   LiveRig& operator=(const LiveRig&) = delete;
 
-  //! Opens the devices if needed and takes a frame pair. Throws DeviceError.
-  LiveFrame frame();
+  //! Thrown by frame() and turn() while a job holds the devices.
+  struct DevicesHeld : std::runtime_error {
+    using std::runtime_error::runtime_error;
+  };
+
+  //! Opens the devices if needed and takes a frame pair. Throws DeviceError, or DevicesHeld
+  //! while held and `job_running()` says the holder still runs.
+  LiveFrame frame(const std::function<bool()>& job_running);
   //! Applies the page's settings: {"exposure": int, "threshold": DN, "method": name,
   //! "laser": -1|0|1}. Throws InvalidInputError naming a bad field (nothing is changed then).
   void apply(const nlohmann::json& settings);
-  //! Turns the table by `degrees` (live positioning before a scan). Throws DeviceError.
-  void turn(double degrees);
-  //! Closes the devices (a job is about to open them).
+  //! Turns the table by `degrees` (live positioning before a scan). Throws DeviceError,
+  //! DevicesHeld as frame().
+  void turn(double degrees, const std::function<bool()>& job_running);
+  //! Closes the devices and keeps them closed for a job: `start_job` runs under the rig's lock,
+  //! so no frame request can open them between the close and the job's start. The hold ends at
+  //! the first request after the job.
+  void hold_for(const std::function<void()>& start_job);
+  //! Closes the devices (the server's end).
   void release();
   nlohmann::json describe() const;
 
  private:
   void open_locked();
+  void close_locked() noexcept;
+  LiveFrame frame_locked();
+  void check_not_held_locked(const std::function<bool()>& job_running);
+  bool held_ = false;
   DeviceChoice devices_;
   mutable std::mutex mutex_;
   std::unique_ptr<sim::PtyBoard> pty_;

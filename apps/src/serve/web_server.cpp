@@ -1,5 +1,7 @@
 #include "serve/web_server.h"
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -58,6 +60,8 @@ httplib::Server::Handler guarded(std::function<void(const Request&, Response&)> 
       handler(req, res);
     } catch (const HttpError& e) {
       send_error(res, e.status, e.what());
+    } catch (const LiveRig::DevicesHeld& e) {
+      send_error(res, 409, e.what());
     } catch (const InvalidInputError& e) {
       send_error(res, 400, e.what());
     } catch (const FileFormatError& e) {
@@ -130,8 +134,12 @@ std::string content_type_of(const fs::path& path) {
   return "application/octet-stream";
 }
 
+// Exactly the loopback names: "localhost", ::1, or a dotted IPv4 address in 127.0.0.0/8 (a
+// name such as 127.evil.example is a domain, and DNS rebinding could point it here).
 bool is_loopback(const std::string& host) {
-  return host == "127.0.0.1" || host == "localhost" || host == "::1" || host.starts_with("127.");
+  if (host == "localhost" || host == "::1") return true;
+  in_addr v4{};
+  return ::inet_pton(AF_INET, host.c_str(), &v4) == 1 && (ntohl(v4.s_addr) >> 24) == 127;
 }
 
 // The host part of a Host header ("localhost:8080", "[::1]:8080").
@@ -184,6 +192,9 @@ class WebApp {
   void list_files(const std::string& extension, Response& res);
   void save_lines(const nlohmann::json& body, Response& res);
   void start_job(JobRequest request, Response& res, bool needs_devices);
+  std::function<bool()> device_job_running() const {
+    return [this] { return jobs_.busy(); };
+  }
 
   ServeOptions options_;
   fs::path data_;
@@ -288,8 +299,7 @@ void WebApp::install_routes() {
                  const nlohmann::json body = parse_body(req);
                  if (!body.contains("degrees") || !body["degrees"].is_number())
                    throw HttpError(400, "'degrees' must be a number");
-                 if (jobs_.busy()) throw HttpError(409, "a job is using the devices");
-                 live_.turn(body["degrees"].get<double>());
+                 live_.turn(body["degrees"].get<double>(), device_job_running());
                  send_json(res, live_.describe());
                }));
   server_.Post("/api/scan/start", guarded([this](const Request& req, Response& res) {
@@ -340,12 +350,14 @@ void WebApp::install_routes() {
                  const SessionManifest m = read_session_manifest(session);
                  if (m.header.calibration)
                    throw HttpError(400, "'" + name + "' is a calibration session");
-                 start_job({"reconstruct",
-                            reconstruct_commands(session, static_cast<int>(m.header.step_count),
-                                                 data_ / "results" / name),
-                            name,
-                            {{"out", "results/" + name}}},
-                           res, false);
+                 JobRequest job{"reconstruct",
+                                reconstruct_commands(session,
+                                                     static_cast<int>(m.header.step_count),
+                                                     data_ / "results" / name),
+                                name,
+                                {{"out", "results/" + name}}};
+                 job.folders = {(data_ / "results" / name).string()};
+                 start_job(std::move(job), res, false);
                }));
   server_.Get("/api/meshes", guarded([this](const Request& req, Response& res) {
                 list_files(req.get_param_value("ext") == "obj" ? ".obj" : ".ply", res);
@@ -357,17 +369,14 @@ void WebApp::install_routes() {
                  const std::string name = checked_name(string_field(parse_body(req), "name"));
                  const fs::path dir = data_ / "grids" / name;
                  if (fs::exists(dir)) throw HttpError(409, "grids/" + name + " exists already");
-                 if (jobs_.busy()) throw HttpError(409, "a job is running: one at a time");
-                 std::error_code ec;
-                 fs::create_directories(dir, ec);
-                 if (ec) throw IoError("cannot create '" + dir.string() + "': " + ec.message());
-                 start_job({"sim-grid",
-                            {{"sim", "--out", (dir / "grid.smg").string()},
-                             {"export", (dir / "grid.smg").string(), "--texture",
-                              (dir / "texture.png").string()}},
-                            "",
-                            {{"grid", "grids/" + name + "/grid.smg"}}},
-                           res, false);
+                 JobRequest job{"sim-grid",
+                                {{"sim", "--out", (dir / "grid.smg").string()},
+                                 {"export", (dir / "grid.smg").string(), "--texture",
+                                  (dir / "texture.png").string()}},
+                                "",
+                                {{"grid", "grids/" + name + "/grid.smg"}}};
+                 job.folders = {dir.string()};
+                 start_job(std::move(job), res, false);
                }));
   server_.Get("/api/lines", guarded([this](const Request& req, Response& res) {
                 const fs::path grid = data_path(req.get_param_value("grid"));
@@ -442,9 +451,6 @@ std::vector<CommandLine> WebApp::reconstruct_commands(const fs::path& session, i
   // One grid column per step: at two (as `demo --device-sim` uses) every second column of a
   // 90-step head scan stayed empty (docs/ui.md). 256 rows of 0.9 mm hold what a Ciclop-class
   // platter takes (< 230 mm).
-  std::error_code ec;
-  fs::create_directories(out, ec);
-  if (ec) throw IoError("cannot create '" + out.string() + "': " + ec.message());
   const std::string grid = (out / "grid.smg").string();
   return {{"reconstruct", session.string(), "--calib", calibration_file().string(), "--n-phi",
            std::to_string(std::max(8, steps)), "--n-h", "256", "--dh", "0.9", "--out", grid},
@@ -503,10 +509,7 @@ void WebApp::devices(Response& res) {
 }
 
 void WebApp::live_frame(Response& res) {
-  const std::string kind = jobs_.status().value("kind", std::string());
-  if (jobs_.busy() && (kind == "scan" || kind == "calibration"))
-    throw HttpError(409, "the devices are busy with the " + kind + " job");
-  const LiveFrame f = live_.frame();
+  const LiveFrame f = live_.frame(device_job_running());
   res.set_header("X-Peaks", std::to_string(f.peaks));
   res.set_header("X-Saturated", std::to_string(f.saturated));
   res.set_header("X-Angle", std::to_string(f.angle_deg));
@@ -516,11 +519,19 @@ void WebApp::live_frame(Response& res) {
 }
 
 void WebApp::start_job(JobRequest request, Response& res, bool needs_devices) {
+  // A capture job that goes on to reconstruct writes into results/NAME.
+  for (const CommandLine& c : request.commands)
+    if (c.front() == "reconstruct" && request.folders.empty())
+      request.folders.push_back((data_ / "results" / fs::path(c[1]).filename()).string());
   if (jobs_.busy())
     throw HttpError(409, "a " + jobs_.status().value("kind", std::string("job")) +
                              " is running: one job at a time (stop it first)");
-  if (needs_devices) live_.release();
-  if (!jobs_.start(std::move(request))) throw HttpError(409, "a job is running: one at a time");
+  bool started = false;
+  if (needs_devices)
+    live_.hold_for([&] { started = jobs_.start(std::move(request)); });
+  else
+    started = jobs_.start(std::move(request));
+  if (!started) throw HttpError(409, "a job is running: one at a time");
   send_json(res, jobs_.status(), 202);
 }
 
@@ -708,9 +719,13 @@ void check_lines(const nlohmann::json& lines) {
         !std::regex_match(line["id"].get<std::string>(), id_pattern))
       throw HttpError(400, "every line needs an 'id' of letters, digits, '_' or '-'");
     const std::string id = line["id"].get<std::string>();
-    const std::string kind = line.value("kind", std::string());
-    if (kind != "line" && kind != "opening" && kind != "seam")
+    const auto kind = line.find("kind");
+    if (kind == line.end() || !kind->is_string() ||
+        (*kind != "line" && *kind != "opening" && *kind != "seam"))
       throw HttpError(400, "line '" + id + "': kind must be line, opening or seam");
+    for (const char* flag : {"closed", "smooth"})
+      if (line.contains(flag) && !line[flag].is_boolean())
+        throw HttpError(400, "line '" + id + "': '" + flag + "' must be true or false");
     if (!line.contains("points") || !line["points"].is_array() || line["points"].size() < 2 ||
         line["points"].size() > 10000)
       throw HttpError(400, "line '" + id + "' needs 2 to 10000 points");
@@ -723,17 +738,18 @@ void check_lines(const nlohmann::json& lines) {
 }
 
 void WebApp::save_lines(const nlohmann::json& body, Response& res) {
+  if (!body.contains("lines")) throw HttpError(400, "'lines' must be given");
+  check_lines(body["lines"]);
   const fs::path grid = data_path(string_field(body, "grid"));
   if (grid.extension() != ".smg" || !fs::is_regular_file(grid))
     throw HttpError(404, "no grid '" + body["grid"].get<std::string>() + "'");
-  if (!body.contains("lines")) throw HttpError(400, "'lines' must be given");
-  check_lines(body["lines"]);
   const int width = int_field(body, "width", 512, 1, 100000);
   const int height = int_field(body, "height", 512, 1, 100000);
   if (jobs_.busy()) throw HttpError(409, "a job is running: one at a time");
   const fs::path dir = grid.parent_path();
+  const std::string svg = lines_svg(body["lines"], width, height);
+  write_file_atomically(dir / "lines.svg", svg);
   write_file_atomically(dir / "lines.json", json_text({{"lines", body["lines"]}}) + "\n");
-  write_file_atomically(dir / "lines.svg", lines_svg(body["lines"], width, height));
   start_job({"regions",
              {{"regions", grid.string(), "--lines", (dir / "lines.svg").string(), "--png",
                (dir / "regions.png").string()}},
