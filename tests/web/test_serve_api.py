@@ -3,6 +3,7 @@ pause/resume, one job at a time, live controls that act on the drivers, bad inpu
 a clear 4xx and nothing lost, and the security rules (loopback, Host, token, data folder only)."""
 import json
 import os
+import socket
 import subprocess
 import time
 import unittest
@@ -127,6 +128,16 @@ class ServeApi(unittest.TestCase):
             self.assertIn(status, (403, 404), path)
             self.assertNotIn(b"TOP-SECRET-CONTENT", body if isinstance(body, bytes) else json.dumps(body).encode())
         self.assertEqual(self.server.request("/files/no/such.png")[0], 404)
+
+    def test_binds_loopback_by_default(self):
+        self.assertTrue(self.server.address.startswith("127.0.0.1:"), self.server.first_line)
+        self.assertNotIn("token=", self.server.first_line)
+        # Not reachable on the machine's other addresses (where it has any).
+        port = int(self.server.address.split(":")[1])
+        other = subprocess.run(["hostname", "-I"], capture_output=True, text=True).stdout.split()
+        for address in [a for a in other if ":" not in a and not a.startswith("127.")][:2]:
+            with self.assertRaises(OSError, msg=address):
+                socket.create_connection((address, port), timeout=2).close()
 
     def test_host_header_must_name_this_machine(self):
         status, body, _ = self.server.request("/api/status", headers={"Host": "attacker.example:80"})
