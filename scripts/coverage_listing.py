@@ -22,7 +22,7 @@ def library_function(name):
     lambdas or compiler-generated pieces."""
     if not name.startswith("scanmesh::"):
         return False
-    for marker in ("(anonymous namespace)", "{lambda", "::detail::", "__", "._omp_fn", "::{unnamed"):
+    for marker in ("(anonymous namespace)", "{lambda", "::detail::", "._omp_fn", "::{unnamed", "._"):
         if marker in name:
             return False
     return True
