@@ -58,12 +58,16 @@ def read_counters(source_dir, build_dir):
                         if not rel.startswith(module + "/src/"):
                             continue
                         files.add(rel)
+                        # A function the compiler inlined into its callers keeps a call count of
+                        # 0 even though its body ran: its lines' counts tell.
+                        executed = {ln["line_number"] for ln in entry.get("lines", []) if ln["count"] > 0}
                         for fn in entry.get("functions", []):
                             name = short_name(fn.get("demangled_name", fn["name"]))
                             if not library_function(name):
                                 continue
+                            body_ran = any(line in executed for line in range(fn["start_line"], fn["end_line"] + 1))
                             key = (rel, name)
-                            functions[key] = functions.get(key, False) or fn["execution_count"] > 0
+                            functions[key] = functions.get(key, False) or fn["execution_count"] > 0 or body_ran
     return functions, files
 
 

@@ -205,4 +205,26 @@ TEST(Calibration, TooFewViewsIsInvalidInput) {
 }
 
 }  // namespace
+// The pinhole with Brown-Conrady distortion: the optical axis lands on the principal point; a
+// point off the axis without distortion at f * x / z + c; normalize() undoes project().
+TEST(CameraModel, ProjectIsThePinholeAndNormalizeItsInverse) {
+  CameraModel m;
+  m.width = 640;
+  m.height = 480;
+  m.fx = 700;
+  m.fy = 690;
+  m.cx = 321;
+  m.cy = 239;
+  EXPECT_TRUE(m.project({0, 0, 500}).isApprox(Eigen::Vector2d(321, 239)));
+  EXPECT_TRUE(m.project({10, -20, 400}).isApprox(Eigen::Vector2d(321 + 700 * 0.025, 239 - 690 * 0.05)));
+  m.k1 = -0.2;
+  m.k2 = 0.05;
+  m.p1 = 0.001;
+  m.p2 = -0.002;
+  const Eigen::Vector3d p(30, 25, 400);
+  const Eigen::Vector2d uv = m.project(p);
+  EXPECT_GT((uv - Eigen::Vector2d(321 + 700 * 0.075, 239 + 690 * 0.0625)).norm(), 0.01);  // distorted
+  EXPECT_TRUE(m.normalize(uv.x(), uv.y()).isApprox(Eigen::Vector2d(0.075, 0.0625), 1e-6));
+}
+
 }  // namespace scanmesh

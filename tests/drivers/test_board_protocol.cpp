@@ -1,6 +1,9 @@
 // The Horus dialect: command spelling and reply classification.
 #include <gtest/gtest.h>
 
+#include "scanmesh/core/errors.h"
+#include "scanmesh/drivers/usb_transport.h"
+
 #include "scanmesh/drivers/board.h"
 
 namespace scanmesh::drivers {
@@ -56,4 +59,17 @@ TEST(LineBuffer, SplitsChunksIntoLines) {
 }
 
 }  // namespace
+TEST(UsbBoardSpec, VidPidAndBusAddressAreParsedAnythingElseRefused) {
+  const drivers::UsbSerialOptions byId = drivers::parse_usb_board_spec("1a86:7523");
+  EXPECT_EQ(byId.vendor_id, 0x1a86);
+  EXPECT_EQ(byId.product_id, 0x7523);
+  EXPECT_EQ(byId.bus, -1);
+  const drivers::UsbSerialOptions byPort = drivers::parse_usb_board_spec("usb:3:17");
+  EXPECT_EQ(byPort.bus, 3);
+  EXPECT_EQ(byPort.address, 17);
+  EXPECT_EQ(byPort.vendor_id, 0);
+  for (const char* bad : {"", "1a86", "1a86:75231", "usb:3", "usb:300:1", "usb:1:2x", "ttyACM0", "zz:zz"})
+    EXPECT_THROW(drivers::parse_usb_board_spec(bad), InvalidInputError) << bad;
+}
+
 }  // namespace scanmesh::drivers

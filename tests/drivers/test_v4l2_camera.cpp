@@ -210,6 +210,7 @@ TEST(SimCamera, ExposureGainScalesAndClipsThePixels) {
       std::this_thread::sleep_for(std::chrono::microseconds(100));
   }
   ASSERT_EQ(c.status, sim::SimCamera::Capture::Status::Ok);
+  EXPECT_EQ(rig.camera->frames_delivered(), 1u);
   ASSERT_EQ(c.bytes.size(), nominal.pixels.size());
   int clipped = 0;
   for (std::size_t i = 0; i < c.bytes.size(); ++i) {

@@ -40,6 +40,26 @@ TEST(SurfaceCurve, LatitudeCurvatureAndTotalCurvatureMatchTheCircle) {
   EXPECT_NEAR(curve.curvature_integral() / (2 * kPi), 1.0, 0.01);
 }
 
+// The lifted points of a latitude curve lie on the sphere (centre (0, 0, 100), radius 80) at
+// the curve's height, and the parameter points pass through the control points.
+TEST(SurfaceCurve, PointsLieOnTheSphereAtTheirParameterPoint) {
+  const auto scan = test::sphere_scan();
+  const ScanSurface surface(scan.grid);
+  const auto controls = latitude(120.0, 12);
+  const SurfaceCurve curve(surface, controls, CurveKind::Polyline, true);
+  for (int k = 0; k < 12; ++k) {
+    const Eigen::Vector2d at = curve.parameter_point(k);
+    EXPECT_NEAR(at.x(), controls[k].x(), 1e-9);
+    EXPECT_NEAR(at.y(), 120.0, 1e-9);
+  }
+  for (double t : {0.0, 2.5, 7.75, 11.5}) {
+    const auto p = curve.point(t);
+    ASSERT_TRUE(p.has_value()) << t;
+    EXPECT_NEAR((*p - Eigen::Vector3d(0, 0, 100)).norm(), 80.0, 0.05) << t;
+    EXPECT_NEAR(p->z(), curve.parameter_point(t).y(), 1e-6) << t;
+  }
+}
+
 TEST(SurfaceCurve, MeridianOfTheSphereHasCurvatureOneOverR) {
   const auto scan = test::sphere_scan();
   const ScanSurface surface(scan.grid);

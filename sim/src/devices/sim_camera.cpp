@@ -112,8 +112,6 @@ void SimCamera::start_streaming() {
   next_frame_ = Clock::now() + period;
 }
 
-void SimCamera::stop_streaming() {}
-
 namespace {
 // The renderer draws the scene at the nominal exposure; a longer exposure collects
 // proportionally more light, clipped at the sensor's full well (255), as a real sensor does.

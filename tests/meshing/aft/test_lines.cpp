@@ -211,4 +211,11 @@ regions:
 }
 
 }  // namespace
+TEST(AnimationLines, KindsHaveTheNamesOfTheFileFormat) {
+  EXPECT_STREQ(to_string(LineKind::Normal), "line");
+  EXPECT_STREQ(to_string(LineKind::Opening), "opening");
+  EXPECT_STREQ(to_string(LineKind::Seam), "seam");
+  EXPECT_STREQ(to_string(LineKind::DataBorder), "data-border");
+}
+
 }  // namespace scanmesh::aft

@@ -637,4 +637,20 @@ TEST(Remesh, LloydSchemeEndsNearACentroidalVoronoiTessellation) {
 }
 
 }  // namespace
+// The names the CLI, the Python module and the JSON reports use, both ways.
+TEST(RemeshNames, SchemesAndMeshPropertiesRoundTripThroughTheirNames) {
+  for (const RemeshScheme scheme : {RemeshScheme::Regularize, RemeshScheme::Lloyd})
+    EXPECT_EQ(parse_remesh_scheme(to_string(scheme)), scheme);
+  EXPECT_EQ(to_string(RemeshScheme::Lloyd), "lloyd");
+  EXPECT_THROW(parse_remesh_scheme("smooth"), InvalidInputError);
+  const auto properties = all_mesh_properties();
+  EXPECT_EQ(properties.size(), 8u);
+  std::string list;
+  for (const MeshProperty p : properties) {
+    EXPECT_EQ(parse_mesh_properties(property_name(p)), std::vector<MeshProperty>{p});
+    list += (list.empty() ? "" : ",") + std::string(property_name(p));
+  }
+  EXPECT_EQ(parse_mesh_properties(list), std::vector<MeshProperty>(properties.begin(), properties.end()));
+}
+
 }  // namespace scanmesh::remeshing

@@ -73,7 +73,6 @@ class SimCamera {
   };
 
   void start_streaming();
-  void stop_streaming();
   //! The next frame if its exposure is over, rendered at the board's state now.
   Capture capture(SimPixelFormat format);
   //! Renders without encoding (tests compare recorded frames against this).
