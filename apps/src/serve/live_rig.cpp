@@ -8,12 +8,11 @@
 #include "scanmesh/drivers/camera.h"
 #include "scanmesh/sim/pty_board.h"
 #include "scanmesh/sim/sim_camera.h"
+#include "cli_support.h"
 #include "sim_rig.h"
 
 namespace scanmesh::cli::web {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // The simulated devices of the live view run 20x faster than real time: a table turn or a
 // laser switch shows within a frame or two instead of the real second.
@@ -125,7 +124,7 @@ LiveFrame LiveRig::frame_locked() {
     shown = std::move(on.rgb);
     draw_peaks(shown, peaks);
   }
-  out.angle_deg = board_->angle_rad() * 180.0 / kPi;
+  out.angle_deg = board_->angle_rad() / kDeg;
   out.png = encode_png(shown, "live frame");
   return out;
 }
@@ -168,7 +167,7 @@ void LiveRig::turn(double degrees, const std::function<bool()>& job_running) {
   check_not_held_locked(job_running);
   open_locked();
   try {
-    board_->move_by(degrees * kPi / 180.0);
+    board_->move_by(degrees * kDeg);
   } catch (...) {
     close_locked();
     throw;

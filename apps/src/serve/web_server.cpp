@@ -98,6 +98,12 @@ int int_field(const nlohmann::json& body, const std::string& key, int fallback, 
   return body[key].get<int>();
 }
 
+bool bool_field(const nlohmann::json& body, const std::string& key, bool fallback) {
+  if (!body.contains(key)) return fallback;
+  if (!body[key].is_boolean()) throw HttpError(400, "'" + key + "' must be true or false");
+  return body[key].get<bool>();
+}
+
 // A name the page gives a new session or grid: one path component, no hidden files.
 std::string checked_name(const std::string& name) {
   static const std::regex allowed("[A-Za-z0-9][A-Za-z0-9._-]{0,63}");
@@ -583,12 +589,10 @@ void WebApp::resume_scan(const nlohmann::json& body, Response& res) {
   const fs::path session = sessions_dir() / name;
   if (!fs::exists(session / "session.json")) throw HttpError(404, "no session '" + name + "'");
   const SessionManifest m = read_session_manifest(session);
-  if (body.contains("check") && !body["check"].is_boolean())
-    throw HttpError(400, "'check' must be true or false");
   const Capture capture{.steps = static_cast<int>(m.header.step_count),
                         .calibration = m.header.calibration.has_value(),
                         .resume = true,
-                        .check = body.value("check", true)};
+                        .check = bool_field(body, "check", true)};
   start_job({capture.calibration ? "calibration" : "scan", capture_commands(session, capture),
              name, {{"steps", capture.steps}, {"out", "results/" + name}, {"resumed", true}}},
             res, true);
@@ -599,9 +603,7 @@ void WebApp::start_calibration(const nlohmann::json& body, Response& res) {
       checked_name(body.contains("name") ? string_field(body, "name")
                                          : "calibration-" + std::to_string(::time(nullptr)));
   const int poses = int_field(body, "poses", 3, 1, 5);
-  if (body.contains("check") && !body["check"].is_boolean())
-    throw HttpError(400, "'check' must be true or false");
-  const bool check = body.value("check", true);
+  const bool check = bool_field(body, "check", true);
   const fs::path session = sessions_dir() / name;
   if (fs::exists(session)) throw HttpError(409, "session '" + name + "' exists");
   start_job({"calibration",
