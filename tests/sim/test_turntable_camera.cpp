@@ -3,7 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <numbers>
+#include <unistd.h>
 
 #include "scanmesh/core/errors.h"
 #include "scanmesh/sim/turntable_camera.h"
@@ -51,6 +54,74 @@ TEST(TurntableRig, YamlRoundTripAndErrors) {
                    "lasers: [{name: a, normal: [0, 0, 0], position_mm: [1, 2, 3]}]\n", "zero"),
                FileFormatError);
   EXPECT_THROW(RigConfig::from_yaml_text("image: [1, 2\n", "bad"), FileFormatError);
+}
+
+TEST(TurntableRig, YamlFileReadsLikeItsTextAndNamesTheFileItCannotRead) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("scanmesh_test_rig_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  RigConfig a = small_rig();
+  a.seed = 77;
+  { std::ofstream(dir / "rig.yaml") << a.to_yaml(); }
+  const RigConfig b = RigConfig::from_yaml_file(dir / "rig.yaml");
+  EXPECT_EQ(b.to_yaml(), a.to_yaml());
+  EXPECT_EQ(b.width, 640);
+  { std::ofstream(dir / "bad.yaml") << "image: {width: -5}\n"; }
+  try {
+    (void)RigConfig::from_yaml_file(dir / "bad.yaml");
+    ADD_FAILURE() << "an impossible width was accepted";
+  } catch (const FileFormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.yaml"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW((void)RigConfig::from_yaml_file(dir / "missing.yaml"), IoError);
+  EXPECT_THROW((void)RigConfig::from_yaml_file(dir), Error);  // a folder is not a file
+  std::filesystem::remove_all(dir);
+}
+
+TEST(TurntableCamera, CalibrationShotsFollowThePlanAndRestoreThePattern) {
+  RigConfig rig = small_rig();
+  rig.width = 320;  // quarter size: this test also runs under the sanitizers
+  rig.height = 240;
+  rig.intrinsics.fx /= 2;
+  rig.intrinsics.fy /= 2;
+  rig.intrinsics.cx = (rig.intrinsics.cx + 0.5) / 2 - 0.5;
+  rig.intrinsics.cy = (rig.intrinsics.cy + 0.5) / 2 - 0.5;
+  TurntableCamera cam(sphere_scene(20.0, 150.0), rig);
+  ASSERT_FALSE(cam.pattern().has_value());
+  CalibrationPlan plan;
+  plan.handheld_views = 2;
+  plan.handheld_lasers = false;
+  plan.platter_angles_rad = {-0.3, 0.0, 0.3};
+  plan.placements = {{.offset_mm = 30.0}, {.offset_mm = 10.0}};
+  const auto shots = render_calibration_shots(cam, plan);
+  ASSERT_EQ(shots.size(), 2u + 2u * 3u);
+  EXPECT_FALSE(cam.pattern().has_value());  // restored
+  for (std::size_t i = 0; i < shots.size(); ++i) {
+    const CalibrationShot& s = shots[i];
+    EXPECT_EQ(s.image.width, 320);
+    EXPECT_EQ(s.on_turntable, i >= 2);
+    if (!s.on_turntable) {
+      EXPECT_TRUE(s.laser_on.empty());
+      continue;
+    }
+    EXPECT_EQ(s.placement, static_cast<int>((i - 2) / 3));
+    EXPECT_DOUBLE_EQ(s.angle_rad, plan.platter_angles_rad[(i - 2) % 3]);
+    ASSERT_EQ(s.laser_on.size(), 2u);
+    // Each laser's frame is brighter than the frame with the lasers off somewhere.
+    for (const Image8& lit : s.laser_on) {
+      long brighter = 0;
+      for (int y = 0; y < lit.height; ++y)
+        for (int x = 0; x < lit.width; ++x) brighter += lit.at(x, y)[0] > s.image.at(x, y)[0] + 40;
+      EXPECT_GT(brighter, 50);
+    }
+  }
+  // The board turns with the table: the platter shots at other angles differ, and so do the
+  // two placements at the same angle.
+  EXPECT_NE(shots[2].image.pixels, shots[4].image.pixels);
+  EXPECT_NE(shots[3].image.pixels, shots[6].image.pixels);
+  // Deterministic: the same plan renders the same pixels.
+  const auto again = render_calibration_shots(cam, plan);
+  EXPECT_EQ(again[5].laser_on[1].pixels, shots[5].laser_on[1].pixels);
 }
 
 TEST(TurntableCamera, DistortionInverseAndProjection) {

@@ -342,6 +342,48 @@ TEST(DataBorder, RoundPatchGetsOneSmoothBorderWithoutStairs) {
               am.mesh.triangles.size(), q.min_angle_deg, 100 * q.fraction_min_angle_ge_30);
 }
 
+// clip_lines_to_border on its own (with_data_border counts; this is the bare clip), on the
+// round patch: a line crossing it loses both ends, one leaving and re-entering it becomes two
+// lines, one inside is kept as it is and one outside is dropped.
+TEST(DataBorder, ClipKeepsThePartsInsideTheBorderAndNamesTheExtraParts) {
+  const RangeGrid grid = elliptic_patch();
+  const ScanSurface surface(grid);
+  const std::vector<AnimationLine> border = trace_data_border(surface);
+  ASSERT_EQ(border.size(), 1u);
+  const LineSet lines = parse_lines_json(R"({"lines": [
+      {"id": "across", "points": [[150, 200], [360, 200]]},
+      {"id": "zig", "points": [[150, 150], [250, 150], [250, 40], [262, 40], [262, 150],
+                               [360, 150]]},
+      {"id": "inside", "points": [[230, 260], [280, 260]]},
+      {"id": "outside", "points": [[20, 200], [100, 200]]}]})",
+                                         "clip.json");
+  const LineSet clipped = clip_lines_to_border(lines, border, surface);
+  std::vector<std::string> ids;
+  for (const AnimationLine& l : clipped.lines) ids.push_back(l.id);
+  EXPECT_EQ(ids, (std::vector<std::string>{"across", "zig", "zig.2", "inside"}));
+  ASSERT_EQ(clipped.lines.size(), 4u);
+  // The ellipse (centre 256.5, 200.5; half-axes 60 and 120 cells) less the border's margin.
+  auto ellipse = [](const Eigen::Vector2d& p) {
+    return std::hypot((p.x() - 256.5) / 60.0, (p.y() - 200.5) / 120.0);
+  };
+  for (int l = 0; l < 3; ++l) {
+    const AnimationLine& line = clipped.lines[l];
+    EXPECT_FALSE(line.closed) << line.id;
+    for (const auto& p : line.pixels) EXPECT_LT(ellipse(p), 1.0) << line.id;
+    // Cut ends lie on the border: within the margin and a cell of the ellipse.
+    for (const auto& end : {line.pixels.front(), line.pixels.back()})
+      EXPECT_GT(ellipse(end), 0.9) << line.id << " end " << end.transpose();
+  }
+  const auto& across = clipped.lines[0].pixels;
+  EXPECT_NEAR(across.front().x(), 256.5 - 60, 4.0);
+  EXPECT_NEAR(across.back().x(), 256.5 + 60, 4.0);
+  EXPECT_EQ(clipped.lines[3].pixels, lines.lines[2].pixels);  // wholly inside: unchanged
+  // The clipped lines pass the checks the region analysis makes, with the border added.
+  LineSet with_border = clipped;
+  with_border.lines.insert(with_border.lines.end(), border.begin(), border.end());
+  EXPECT_NO_THROW(validate_lines(with_border, surface));
+}
+
 TEST(DataBorder, AutoOnTheFullHeadGivesTodaysMesh) {
   const PartialHead& head = partial_head();
   const test::SampleHead& full = head.full;

@@ -100,6 +100,30 @@ TEST(FansOrientation, SphereFacesPointOutward) {
   }
 }
 
+TEST(FansNormals, EstimatesAreRadialOnASphereOrientedAlikeAndInInputOrder) {
+  const auto pts = test::random_sphere(3000, 13);
+  const auto normals = estimate_fan_normals(pts);
+  ASSERT_EQ(normals.size(), pts.size());
+  // On the unit sphere the true normal at p is p; the orientation is one of the two, the same
+  // for every point (propagation over the neighbour graph, outward at the start point).
+  int outward = 0, worst_deg = 0;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    EXPECT_NEAR(normals[i].norm(), 1.0, 1e-9);
+    const double c = normals[i].dot(pts[i]);
+    outward += c > 0;
+    worst_deg = std::max(worst_deg, static_cast<int>(std::acos(std::min(1.0, std::abs(c))) *
+                                                     180.0 / 3.14159265358979));
+  }
+  EXPECT_TRUE(outward == 0 || outward == static_cast<int>(pts.size())) << outward;
+  EXPECT_LT(worst_deg, 10);
+  // The same as the mesh's vertex normals (one estimate serves both).
+  const Mesh m = build_fans(pts).mesh;
+  ASSERT_EQ(m.normals.size(), pts.size());
+  for (std::size_t i = 0; i < pts.size(); i += 97)
+    EXPECT_GT(std::abs(m.normals[i].cast<double>().dot(normals[i])), 0.999);
+  EXPECT_THROW((void)estimate_fan_normals({pts[0], pts[1]}), InvalidInputError);
+}
+
 TEST(FansDeterminism, SameTrianglesForAnyThreadCount) {
   const auto pts = test::random_sphere(8000, 11);
   FanOptions one;

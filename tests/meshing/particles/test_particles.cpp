@@ -243,6 +243,69 @@ TEST(SpringNetwork, AdaptiveEdgesAreShorterWhereCurvatureIsHigher) {
   EXPECT_LT(adaptive, uniform - 0.3);
 }
 
+// The same law at a coarse R (a quarter of the particles): small enough for the sanitizer job,
+// which leaves the finer test above out.
+TEST(SpringNetwork, AdaptiveRestLengthsFollowTheCurvatureAtACoarseEdge) {
+  const double R = 0.35;
+  const auto obj = sim::make_ellipsoid(Vector3d::Zero(), Vector3d(2.0, 1.0, 0.7));
+  const auto s = surface_of(obj, Vector3d(-2.2, -1.2, -0.9), Vector3d(2.2, 1.2, 0.9));
+  const ParticleMeshResult r = particle_mesh(*s, {.edge_length = R, .adaptive = true});
+  expect_closed_manifold(r.mesh, 2);
+  std::vector<double> len, curv;
+  for (const auto& t : r.mesh.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const Vector3d a = r.mesh.positions[t[k]], b = r.mesh.positions[t[(k + 1) % 3]];
+      const sim::SurfaceGeometry g = sim::geometry_from_field(obj->field(0.5 * (a + b)));
+      len.push_back((a - b).norm());
+      curv.push_back(std::max(std::abs(g.k1), std::abs(g.k2)));
+    }
+  const double c = pearson(len, curv);
+  std::printf("coarse adaptive ellipsoid: %zu vertices, correlation %.3f\n",
+              r.mesh.positions.size(), c);
+  EXPECT_LT(c, -0.4);
+}
+
+// The network's own counters: iterations done so far and particles alive, next to the mesh it
+// hands out.
+TEST(SpringNetwork, CountsItsIterationsAndParticles) {
+  const auto s = surface_of(sim::make_sphere(Vector3d::Zero(), 1.0), Vector3d::Constant(-1.2),
+                            Vector3d::Constant(1.2));
+  SpringNetwork net(marching_tetrahedra(*s, 0.4), {.edge_length = 0.3});
+  EXPECT_EQ(net.iteration(), 0);
+  const std::size_t start = net.vertex_count();
+  EXPECT_EQ(start, net.mesh().positions.size());
+  int changes = 0;
+  for (int i = 0; i < 5; ++i) changes += net.step(*s).changed() ? 1 : 0;
+  EXPECT_EQ(net.iteration(), 5);
+  EXPECT_EQ(net.vertex_count(), net.mesh().positions.size());
+  EXPECT_EQ(net.vertex_count(), net.vertex_ids().size());
+  std::printf("sphere at 0.4 relaxed for 0.3: %zu -> %zu particles, %d changing steps\n", start,
+              net.vertex_count(), changes);
+  const int more = net.relax(*s);
+  EXPECT_EQ(net.iteration(), 5 + more);
+  expect_closed_manifold(net.mesh(), 2);
+}
+
+// Decision 33's dislocation glides (off by default): on a sphere from the layered start (the
+// subdivided start leaves no 7-5 pair to glide), the glides keep the mesh closed and leave no
+// more valence-7 particles than without them.
+TEST(SpringNetwork, DislocationGlidesKeepTheMeshClosedAndRemoveSevens) {
+  const auto s = surface_of(sim::make_sphere(Vector3d::Zero(), 1.0), Vector3d::Constant(-1.2),
+                            Vector3d::Constant(1.2));
+  auto sevens = [&](int glide) {
+    const ParticleMeshResult r =
+        particle_mesh(*s, {.edge_length = 0.25, .max_subdivision = 0, .max_glide = glide});
+    expect_closed_manifold(r.mesh, 2);
+    const auto v = valence_histogram(r.mesh);
+    int n7 = 0, n5 = 0;
+    for (const auto& [val, count] : v) n7 += val >= 7 ? count : 0, n5 += val == 5 ? count : 0;
+    std::printf("glide %d: %d fives, %d sevens or more\n", glide, n5, n7);
+    return n7;
+  };
+  const int without = sevens(0);
+  EXPECT_LE(sevens(6), without);
+}
+
 TEST(SpringNetwork, RejectsImpossibleOptions) {
   Mesh tri;
   tri.positions = {Vector3d::Zero(), Vector3d::UnitX(), Vector3d::UnitY()};
@@ -386,6 +449,26 @@ TEST(Topology, FastSeparationStillGivesTwoClosedSpheres) {
   expect_two_closed_spheres(3, 5, 0.2, false);
 }
 
+// Without patience (ring_patience 0) the band of ring candidates is removed wholesale as soon
+// as it appears (gap decision 26): the fallback, whose holes are closed by fans, must also end
+// in two closed spheres without crossings.
+TEST(Topology, FallbackCutWithoutPatienceStillGivesClosedPieces) {
+  const auto sk = load_skeleton("two_blobs_apart.yaml");
+  ParticleOptions o{.edge_length = 0.3};
+  o.ring_patience = 0;
+  const auto frames = animate(surface_at(sk), sk->start_time(), sk->end_time(), 4, o, 8);
+  int cuts = 0, fallback = 0;
+  for (const auto& f : frames) cuts += f.cuts, fallback += f.fallback_cuts;
+  std::printf("no patience: %d ring cuts, %d fallback cuts\n", cuts, fallback);
+  const Mesh& last = frames.back().mesh;
+  std::vector<int> comp;
+  const int pieces = face_components(last, comp);
+  EXPECT_EQ(pieces, 2);
+  EXPECT_GE(fallback, 1);
+  for (int c = 0; c < pieces; ++c) expect_closed_manifold(component_mesh(last, comp, c), 2);
+  EXPECT_EQ(count_intersecting_faces(last), 0u);
+}
+
 TEST(Topology, FinerMeshSeparatesToo) { expect_two_closed_spheres(6, 20, 0.12, true); }
 
 // Other resolutions and a medium speed (5 frames x 10 steps): still one ring cut each.
@@ -527,6 +610,46 @@ TEST(ScanMode, SimulatedHeadConvergesToAManifoldMeshOnTheRangeSurface) {
       m.vertex_count(), r.iterations, turned, checked, median, p95, err.back());
   EXPECT_LT(median, 0.5);
   EXPECT_LT(p95, 3.0);
+}
+
+}  // namespace
+}  // namespace scanmesh::particles
+
+namespace scanmesh::particles {
+namespace {
+
+// The head at 64 x 64 cells (R = 6 mm): small enough for the sanitizer job, and it has turned
+// triangles at its borders that decision 38 drops (whole border fans among them).
+TEST(ScanMode, CoarseHeadConvergesWithoutTurnedTriangles) {
+  sim::ScannerConfig cfg = sim::builtin_head_scanner();
+  cfg.n_phi = cfg.n_h = 64;
+  cfg.dh_mm *= 8.0;
+  sim::SimulatedScan scan = sim::simulate_scan(sim::builtin_head_scene(), cfg);
+  clean_grid(scan.grid);
+  const ScanSurface surface(scan.grid);
+  const ScanImplicitSurface implicit(surface);
+  const ParticleMeshResult r = particle_mesh(implicit, {.edge_length = 6.0});
+  EXPECT_TRUE(r.converged) << r.iterations << " iterations";
+  const Mesh& m = r.mesh;
+  ASSERT_GT(m.vertex_count(), 1000u);
+  const TopologyStats st = topology_stats(m);
+  EXPECT_EQ(st.nonmanifold_edges, 0u);
+  EXPECT_EQ(st.inconsistent_edges, 0u);
+  EXPECT_EQ(st.unreferenced_vertices, 0u);
+  std::size_t turned = 0, checked = 0;
+  for (const auto& t : m.triangles) {
+    const Vector3d c = (m.positions[t[0]] + m.positions[t[1]] + m.positions[t[2]]) / 3.0;
+    const auto f = implicit.evaluate(c);
+    if (!f) continue;
+    ++checked;
+    const Vector3d n =
+        (m.positions[t[1]] - m.positions[t[0]]).cross(m.positions[t[2]] - m.positions[t[0]]);
+    turned += n.dot(f->gradient) <= 0.0 ? 1 : 0;
+  }
+  EXPECT_EQ(turned, 0u);
+  EXPECT_GT(checked, m.triangles.size() * 95 / 100);
+  std::printf("64 x 64 head, R = 6: %zu vertices, %d iterations, %zu border loops\n",
+              m.vertex_count(), r.iterations, st.boundary_loops);
 }
 
 }  // namespace
