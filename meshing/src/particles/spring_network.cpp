@@ -237,18 +237,32 @@ struct SpringNetwork::Impl {
     }
   }
 
-  // True if moving particle v to q turns none of its triangles that face along n (> 0)
-  // against n.
+  // True if moving particle v to q turns none of its triangles over that are not turned now.
+  // "Turned" is the test untangle_turned_faces() undoes: the face normal against the sum of
+  // its corners' gradients (n, v's gradient, where a corner's F is undefined). With a weaker
+  // test here (v's gradient alone) a particle near a tight bend was let into a position the
+  // untangling then took back, and the springs pushed it there again: a cycle of ~15 steps
+  // that kept relax() from converging on scans (docs/particles.md, decision 41).
   bool keeps_orientation(int v, const Vector3d& q, const Vector3d& n) const {
     for (int f : verts[v].faces) {
       const auto& t = faces[f].v;
+      const Vector3d g = corner_gradients(t).value_or(n);
       std::array<Vector3d, 3> x{P(t[0]), P(t[1]), P(t[2])};
-      if ((x[1] - x[0]).cross(x[2] - x[0]).dot(n) <= 0.0) continue;  // already turned
+      if ((x[1] - x[0]).cross(x[2] - x[0]).dot(g) <= 0.0) continue;  // already turned
       for (int k = 0; k < 3; ++k)
         if (t[k] == v) x[k] = q;
-      if ((x[1] - x[0]).cross(x[2] - x[0]).dot(n) <= 0.0) return false;
+      if ((x[1] - x[0]).cross(x[2] - x[0]).dot(g) <= 0.0) return false;
     }
     return true;
+  }
+  // The sum of the corners' gradients of face t; none where F is undefined at a corner.
+  std::optional<Vector3d> corner_gradients(const std::array<int, 3>& t) const {
+    Vector3d g = Vector3d::Zero();
+    for (int v : t) {
+      if (!verts[v].defined) return std::nullopt;
+      g += verts[v].f.gradient;
+    }
+    return g;
   }
 
   // ---- Rule 1: midpoint collapse with the link condition ---------------------------------
@@ -799,12 +813,8 @@ struct SpringNetwork::Impl {
   // A face turned against the surface: its normal points against the sum of its corners'
   // gradients (evaluated this step; the same test as keeps_orientation, without evaluating F).
   bool turned_at_corners(const std::array<int, 3>& t) const {
-    Vector3d g = Vector3d::Zero();
-    for (int v : t) {
-      if (!verts[v].defined) return false;
-      g += verts[v].f.gradient;
-    }
-    return face_normal(t).dot(g) < 0.0;
+    const auto g = corner_gradients(t);
+    return g && face_normal(t).dot(*g) < 0.0;
   }
   int turned_faces_around(int v) const {
     int n = 0;
