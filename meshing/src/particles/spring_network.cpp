@@ -325,12 +325,21 @@ struct SpringNetwork::Impl {
   }
 
   // ---- Rule 2: 2 -> 4 split at the midpoint ---------------------------------------------
+  static constexpr int kMaxSplitValence = 12;
   bool try_split(int a, int b, const ImplicitSurface& surface) {
     auto ef = edge_faces(a, b);
     if (ef.size() != 2) return false;  // Gap: border edges are not split (scan mode)
     if (!has_directed(ef[0], a, b)) std::swap(ef[0], ef[1]);
     if (!has_directed(ef[0], a, b) || !has_directed(ef[1], b, a)) return false;
     const int c = opposite(ef[0], a, b), d = opposite(ef[1], a, b);
+    // Decision 42: in relax() (static surfaces, scan mode; §4.4 off) a split adds a spring at c
+    // and at d only up to kMaxSplitValence springs. The time step is 1 / (rho x largest
+    // valence), so one particle whose fan kept growing slowed the whole network down (the
+    // 512 x 512 head: a particle waiting in a hole of the data reached 820 springs, the step
+    // fell to 1/820). An animation's neck needs such fans while it constricts (§4.4 on).
+    if (!o.topology_change &&
+        (fast_valence(c) >= kMaxSplitValence || fast_valence(d) >= kMaxSplitValence))
+      return false;
     const double rest = spring(a, b).rest;
     Vector3d mid = 0.5 * (P(a) + P(b));
     // Gap: the new particle is Newton-projected at once (the report lets eq. 8 do it).
