@@ -297,10 +297,12 @@ keyframes:
   coarse.n_phi = coarse.n_h = 128;
   coarse.dh_mm *= 4.0;
   scan_mode_row("built-in, 128 x 128", coarse, 4.0);
-  scan_mode_row("ideal (configs/sim/head-scanner-ideal.yaml)",
-                sim::ScannerConfig::from_yaml_file(std::string(SCANMESH_SOURCE_DIR) +
-                                                   "/configs/sim/head-scanner-ideal.yaml"),
-                4.0);
+  // As configs/sim/head-scanner-ideal.yaml: no hair, spikes, dropouts or occlusion.
+  sim::ScannerConfig ideal = sim::builtin_head_scanner();
+  ideal.noise_sigma_mm = 0.05;
+  ideal.grazing_dropout = ideal.occlusion = ideal.hair = false;
+  ideal.spike_probability = 0;
+  scan_mode_row("built-in without defects but noise 0.05 mm", ideal, 4.0);
   scan_mode_row("built-in (hair noise)", sim::builtin_head_scanner(), 4.0);
   return 0;
 }

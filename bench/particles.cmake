@@ -6,4 +6,3 @@ target_link_libraries(bench_particles PRIVATE scanmesh::meshing scanmesh::sim
   scanmesh::acquisition scanmesh::reconstruction CGAL::CGAL
   OpenMP::OpenMP_CXX VTK::CommonCore VTK::CommonDataModel VTK::FiltersCore)
 target_include_directories(bench_particles PRIVATE ${PROJECT_SOURCE_DIR}/apps/src)
-target_compile_definitions(bench_particles PRIVATE SCANMESH_SOURCE_DIR="${PROJECT_SOURCE_DIR}")

@@ -11,6 +11,7 @@
 #include "scanmesh/acquisition/calibration.h"
 #include "scanmesh/core/errors.h"
 #include "scanmesh/sim/turntable_camera.h"
+#include "scanmesh_test_paths.h"
 
 namespace scanmesh {
 namespace {

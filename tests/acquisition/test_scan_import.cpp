@@ -17,6 +17,7 @@
 #include "scanmesh/core/mesh_io.h"
 #include "scanmesh/meshing/grid_mesh.h"
 #include "surface_distance_test_util.h"
+#include "scanmesh_test_paths.h"
 
 namespace scanmesh {
 namespace {

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include "scanmesh_test_paths.h"
 
 namespace scanmesh::test {
 

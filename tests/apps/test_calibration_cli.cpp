@@ -19,6 +19,7 @@
 #include "scanmesh/acquisition/calibration.h"
 #include "scanmesh/acquisition/session.h"
 #include "scanmesh/sim/turntable_camera.h"
+#include "scanmesh_test_paths.h"
 
 namespace scanmesh {
 namespace {

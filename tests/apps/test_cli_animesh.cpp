@@ -11,6 +11,7 @@
 #include "cli_runner.h"
 #include "scanmesh/core/image.h"
 #include "scanmesh/core/mesh_io.h"
+#include "scanmesh_test_paths.h"
 
 namespace scanmesh {
 namespace {

@@ -12,6 +12,7 @@
 
 #include "cli_runner.h"
 #include "scanmesh/core/image.h"
+#include "scanmesh_test_paths.h"
 
 namespace scanmesh {
 namespace {

@@ -14,6 +14,7 @@
 #include "cli_runner.h"
 #include "scanmesh/core/grid_file.h"
 #include "scanmesh/core/mesh_io.h"
+#include "scanmesh_test_paths.h"
 
 namespace scanmesh {
 namespace {

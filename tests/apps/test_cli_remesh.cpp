@@ -14,6 +14,7 @@
 
 #include "../meshing/remeshing/remesh_test_meshes.h"
 #include "scanmesh/core/mesh_io.h"
+#include "scanmesh_test_paths.h"
 
 namespace scanmesh {
 namespace {

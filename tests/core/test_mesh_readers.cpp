@@ -10,6 +10,7 @@
 #include "scanmesh/core/errors.h"
 #include "scanmesh/core/mesh_io.h"
 #include "test_util.h"
+#include "scanmesh_test_paths.h"
 
 namespace scanmesh {
 namespace {

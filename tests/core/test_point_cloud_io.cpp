@@ -16,6 +16,7 @@
 #include "scanmesh/core/grid_file.h"
 #include "scanmesh/core/range_grid.h"
 #include "scanmesh/core/point_cloud_io.h"
+#include "scanmesh_test_paths.h"
 
 namespace scanmesh {
 namespace {

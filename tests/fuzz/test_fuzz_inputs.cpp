@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "fuzz_registry.h"
+#include "scanmesh_test_paths.h"
 
 namespace scanmesh::fuzz {
 namespace {

@@ -18,6 +18,7 @@
 #include <sstream>
 #include <string>
 #include <vector>
+#include "scanmesh_test_paths.h"
 
 namespace scanmesh::hostile {
 

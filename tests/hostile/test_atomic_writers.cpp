@@ -10,6 +10,7 @@
 #include <regex>
 #include <string>
 #include <vector>
+#include "scanmesh_test_paths.h"
 
 namespace {
 

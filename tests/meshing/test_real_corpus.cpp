@@ -18,6 +18,7 @@
 #include "scanmesh/meshing/remeshing/remesh.h"
 #include "scanmesh/meshing/remeshing/remesh_quality.h"
 #include "scanmesh/reconstruction/surface_fields.h"
+#include "scanmesh_test_paths.h"
 
 namespace scanmesh {
 namespace {

@@ -6,6 +6,7 @@
 #include "scanmesh/core/errors.h"
 #include "scanmesh/sim/range_scanner.h"
 #include "scanmesh/sim/scene.h"
+#include "scanmesh_test_paths.h"
 
 using namespace scanmesh;
 using namespace scanmesh::sim;

@@ -16,6 +16,7 @@
 #include "scanmesh/meshing/mesh_check.h"
 #include "scanmesh/reconstruction/scan_surface.h"
 #include "scanmesh/sim/range_scanner.h"
+#include "scanmesh_test_paths.h"
 
 namespace scanmesh::aft::test {
 

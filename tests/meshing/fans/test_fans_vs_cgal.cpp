@@ -13,6 +13,7 @@
 #include "scanmesh/meshing/mesh_check.h"
 #include "scanmesh/sim/range_scanner.h"
 #include "scanmesh/sim/scene.h"
+#include "scanmesh_test_paths.h"
 
 namespace scanmesh {
 namespace {

@@ -6,6 +6,7 @@
 #include "../test_meshes.h"
 #include "scanmesh/core/image.h"
 #include "scanmesh/meshing/mesh_check.h"
+#include "scanmesh_test_paths.h"
 
 namespace scanmesh {
 namespace {

@@ -20,6 +20,7 @@
 #include "scanmesh/reconstruction/scan_surface.h"
 #include "scanmesh/sim/range_scanner.h"
 #include "test_common.h"
+#include "scanmesh_test_paths.h"
 
 namespace scanmesh::particles {
 namespace {
