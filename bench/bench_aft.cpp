@@ -27,6 +27,7 @@
 #include "scanmesh/meshing/grid_mesh.h"
 #include "scanmesh/sim/range_scanner.h"
 #include "scanmesh/sim/scene.h"
+#include "scanmesh_test_paths.h"
 
 using namespace scanmesh;
 using namespace scanmesh::bench_aft;

@@ -17,6 +17,8 @@
 #include <string>
 #include <vector>
 
+#include "scanmesh_test_paths.h"
+
 namespace fs = std::filesystem;
 
 namespace {

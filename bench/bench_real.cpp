@@ -32,6 +32,7 @@
 #include "scanmesh/meshing/mesh_check.h"
 #include "scanmesh/meshing/remeshing/remesh.h"
 #include "scanmesh/reconstruction/surface_fields.h"
+#include "scanmesh_test_paths.h"
 
 using namespace scanmesh;
 using Eigen::Vector3d;

@@ -5,4 +5,4 @@ target_link_libraries(bench_real PRIVATE scanmesh::acquisition scanmesh::reconst
   scanmesh::meshing CGAL::CGAL pcl_common pcl_features pcl_search pcl_kdtree pcl_surface
   OpenMP::OpenMP_CXX)
 target_include_directories(bench_real SYSTEM PRIVATE ${PCL_INCLUDE_DIRS})
-target_compile_definitions(bench_real PRIVATE SCANMESH_CORPUS_DIR="${SCANMESH_CORPUS_DIR}/data")
+target_link_libraries(bench_real PRIVATE scanmesh_test_paths)
