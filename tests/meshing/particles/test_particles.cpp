@@ -547,18 +547,52 @@ TEST(ScanMode, SimulatedSphereGridGivesVerticesOnTheTrueSphere) {
 namespace scanmesh::particles {
 namespace {
 
+// The built-in head scanned on an n x n grid over the same height range, cleaned like
+// `scanmesh clean`, and its range surface as an implicit surface.
+struct HeadRangeSurface {
+  explicit HeadRangeSurface(int n) : scanner(scanner_for(n)), grid(scan(scanner)) {}
+  static sim::ScannerConfig scanner_for(int n) {
+    sim::ScannerConfig cfg = sim::builtin_head_scanner();
+    cfg.dh_mm *= static_cast<double>(cfg.n_h) / n;
+    cfg.n_phi = cfg.n_h = n;
+    return cfg;
+  }
+  static RangeGrid scan(const sim::ScannerConfig& cfg) {
+    RangeGrid g = sim::simulate_scan(sim::builtin_head_scene(), cfg).grid;
+    clean_grid(g);
+    return g;
+  }
+  sim::ScannerConfig scanner;
+  RangeGrid grid;
+  ScanSurface surface{grid};
+  ScanImplicitSurface implicit{surface};
+};
+
+// Triangles turned over against the range surface's outward normal (F's gradient at the
+// centroid), and how many centroids could be checked (F defined there).
+std::pair<std::size_t, std::size_t> turned_triangles(const Mesh& m,
+                                                     const ImplicitSurface& surface) {
+  std::size_t turned = 0, checked = 0;
+  for (const auto& t : m.triangles) {
+    const Vector3d c = (m.positions[t[0]] + m.positions[t[1]] + m.positions[t[2]]) / 3.0;
+    const auto f = surface.evaluate(c);
+    if (!f) continue;
+    ++checked;
+    const Vector3d n =
+        (m.positions[t[1]] - m.positions[t[0]]).cross(m.positions[t[2]] - m.positions[t[0]]);
+    turned += n.dot(f->gradient) <= 0.0 ? 1 : 0;
+  }
+  return {turned, checked};
+}
+
 // Issue 7, scan mode on the full simulated head (built-in head scene and scanner, grid reduced
 // to 128 x 128 with the same height range; cleaned like `scanmesh clean`). Before decisions
 // 34-35 relax() hit its 3,000-iteration limit here (flips and Rule 1 collapses undoing each
 // other; slivers at the borders turning over); measured now: 275 iterations.
 TEST(ScanMode, SimulatedHeadConvergesToAManifoldMeshOnTheRangeSurface) {
-  sim::ScannerConfig cfg = sim::builtin_head_scanner();
-  cfg.n_phi = cfg.n_h = 128;
-  cfg.dh_mm *= 4.0;
-  sim::SimulatedScan scan = sim::simulate_scan(sim::builtin_head_scene(), cfg);
-  clean_grid(scan.grid);
-  const ScanSurface surface(scan.grid);
-  const ScanImplicitSurface implicit(surface);
+  const HeadRangeSurface head(128);
+  const sim::ScannerConfig& cfg = head.scanner;
+  const ScanImplicitSurface& implicit = head.implicit;
   const ParticleMeshResult r = particle_mesh(implicit, {.edge_length = 4.0});
   EXPECT_TRUE(r.converged) << r.iterations << " iterations";
   const Mesh& m = r.mesh;
@@ -579,16 +613,7 @@ TEST(ScanMode, SimulatedHeadConvergesToAManifoldMeshOnTheRangeSurface) {
   // Orientation against the grid surface's outward normal at each triangle's centroid: none
   // turned over (decision 38 drops the turned triangles at borders; before it 7 of 8,296, all
   // touching a border; 221 before border edges could collapse, decision 35).
-  std::size_t turned = 0, checked = 0;
-  for (const auto& t : m.triangles) {
-    const Vector3d c = (m.positions[t[0]] + m.positions[t[1]] + m.positions[t[2]]) / 3.0;
-    const auto f = implicit.evaluate(c);
-    if (!f) continue;
-    ++checked;
-    const Vector3d n =
-        (m.positions[t[1]] - m.positions[t[0]]).cross(m.positions[t[2]] - m.positions[t[0]]);
-    turned += n.dot(f->gradient) <= 0.0 ? 1 : 0;
-  }
+  const auto [turned, checked] = turned_triangles(m, implicit);
   EXPECT_EQ(turned, 0u);
   EXPECT_GT(checked, m.triangles.size() * 97 / 100);
   // Distance to the ground truth: the true surface along the scanner ray through the vertex.
@@ -613,22 +638,11 @@ TEST(ScanMode, SimulatedHeadConvergesToAManifoldMeshOnTheRangeSurface) {
   EXPECT_LT(p95, 3.0);
 }
 
-}  // namespace
-}  // namespace scanmesh::particles
-
-namespace scanmesh::particles {
-namespace {
-
 // The head at 64 x 64 cells (R = 6 mm): small enough for the sanitizer job, and it has turned
 // triangles at its borders that decision 38 drops (whole border fans among them).
 TEST(ScanMode, CoarseHeadConvergesWithoutTurnedTriangles) {
-  sim::ScannerConfig cfg = sim::builtin_head_scanner();
-  cfg.n_phi = cfg.n_h = 64;
-  cfg.dh_mm *= 8.0;
-  sim::SimulatedScan scan = sim::simulate_scan(sim::builtin_head_scene(), cfg);
-  clean_grid(scan.grid);
-  const ScanSurface surface(scan.grid);
-  const ScanImplicitSurface implicit(surface);
+  const HeadRangeSurface head(64);
+  const ScanImplicitSurface& implicit = head.implicit;
   const ParticleMeshResult r = particle_mesh(implicit, {.edge_length = 6.0});
   EXPECT_TRUE(r.converged) << r.iterations << " iterations";
   const Mesh& m = r.mesh;
@@ -637,16 +651,7 @@ TEST(ScanMode, CoarseHeadConvergesWithoutTurnedTriangles) {
   EXPECT_EQ(st.nonmanifold_edges, 0u);
   EXPECT_EQ(st.inconsistent_edges, 0u);
   EXPECT_EQ(st.unreferenced_vertices, 0u);
-  std::size_t turned = 0, checked = 0;
-  for (const auto& t : m.triangles) {
-    const Vector3d c = (m.positions[t[0]] + m.positions[t[1]] + m.positions[t[2]]) / 3.0;
-    const auto f = implicit.evaluate(c);
-    if (!f) continue;
-    ++checked;
-    const Vector3d n =
-        (m.positions[t[1]] - m.positions[t[0]]).cross(m.positions[t[2]] - m.positions[t[0]]);
-    turned += n.dot(f->gradient) <= 0.0 ? 1 : 0;
-  }
+  const auto [turned, checked] = turned_triangles(m, implicit);
   EXPECT_EQ(turned, 0u);
   EXPECT_GT(checked, m.triangles.size() * 95 / 100);
   std::printf("64 x 64 head, R = 6: %zu vertices, %d iterations, %zu border loops\n",
