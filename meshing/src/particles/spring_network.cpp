@@ -477,7 +477,8 @@ struct SpringNetwork::Impl {
   // end up turned over against the surface normal: its border particles slide along their
   // border chord and cannot untangle it. Such a triangle is dropped (the border moves inwards)
   // when that keeps the mesh a manifold: it has a border edge whose opposite particle is
-  // interior, or two border edges (their shared particle goes with it). A turned triangle
+  // interior, or two border edges (their shared particle goes with it), or a border edge whose
+  // opposite particle is on the border too (that particle keeps its larger wedge). A turned triangle
   // that touches the border only at a particle goes with that particle's whole fan, if the
   // fan's rim is interior but for the particle's two border neighbours. Returns the number of
   // triangles dropped.
@@ -492,10 +493,14 @@ struct SpringNetwork::Impl {
         for (int k = 0; k < 3; ++k)
           if (edge_faces(t[k], t[(k + 1) % 3]).size() == 1)
             ++border_edges, opposite_of_border = t[(k + 2) % 3];
-        if (border_edges == 1 && verts[opposite_of_border].boundary) continue;
         if (border_edges > 0) {
+          // With one border edge and the opposite particle on another stretch of border, the
+          // drop leaves that particle a bow-tie: it keeps its larger wedge (decision 43).
+          const std::size_t before = dead_faces;
           drop_faces({static_cast<int>(f)});
-          ++this_round;
+          if (border_edges == 1 && verts[opposite_of_border].boundary)
+            separate_wedges({opposite_of_border});
+          this_round += static_cast<int>(dead_faces - before);
           continue;
         }
         for (int v : t)
@@ -757,6 +762,7 @@ struct SpringNetwork::Impl {
     return marked_now;
   }
   bool any_topo_ = false;
+  bool has_border_ = false;  // scan mode: the start mesh had borders (decision 43)
   // Sorted spring keys (deterministic processing order), rebuilt only after the spring set
   // changed: sorting every step was a quarter of the run time.
   std::vector<std::uint64_t> keys_;
@@ -1155,6 +1161,90 @@ struct SpringNetwork::Impl {
     return static_cast<int>(lost.size());
   }
 
+  // Scan mode (a mesh with borders, decision 43): where the range surface has a hole or a
+  // step the grid cannot represent (the underside of the nose: r jumps 17 mm between two rows),
+  // F is undefined or its zero set is far from the particles that the start mesh put across
+  // the gap. Such particles can never settle, and the springs of their neighbours, pulled
+  // across the gap, split again and again. A particle that stays lost (F undefined, or farther
+  // than R from F = 0 to first order) for more than `ring_patience` steps is removed with its
+  // triangles, and the hole stays open: it is a border of the data, not of the object.
+  int open_holes_at_lost_particles() {
+    std::vector<int> lost;
+    lost_steps_.resize(verts.size(), 0);
+    for (std::size_t i = 0; i < verts.size(); ++i) {
+      const Vertex& v = verts[i];
+      if (!v.alive) continue;
+      const bool lost_now = !v.defined || farther_than_R(v.f);
+      lost_steps_[i] = lost_now ? lost_steps_[i] + 1 : 0;
+      if (lost_steps_[i] > o.ring_patience) lost.push_back(static_cast<int>(i));
+    }
+    if (lost.empty()) return 0;
+    std::vector<int> doomed;
+    for (int v : lost) doomed.insert(doomed.end(), verts[v].faces.begin(), verts[v].faces.end());
+    std::sort(doomed.begin(), doomed.end());
+    doomed.erase(std::unique(doomed.begin(), doomed.end()), doomed.end());
+    std::vector<int> rim;
+    for (int f : doomed) rim.insert(rim.end(), faces[f].v.begin(), faces[f].v.end());
+    drop_faces(doomed);
+    for (int v : lost)
+      if (verts[v].alive) kill_vertex(v);
+    separate_wedges(std::move(rim));
+    rebuild_springs();
+    return static_cast<int>(lost.size());
+  }
+  // First-order distance |F| / |grad F| beyond R (a vanishing gradient counts as far).
+  bool farther_than_R(const ImplicitValue& f) const {
+    const double g = f.gradient.norm();
+    return g < 1e-10 || std::abs(f.value) > R() * g;
+  }
+  // A particle of `touched` whose triangles form several wedges (joined only at the particle:
+  // a bow-tie left where faces were dropped) keeps its largest wedge; the others' faces are
+  // dropped, and their corners are checked in turn (dropping faces can make new bow-ties).
+  void separate_wedges(std::vector<int> touched) {
+    while (!touched.empty()) {
+      const int v = touched.back();
+      touched.pop_back();
+      if (!verts[v].alive || verts[v].faces.size() < 2) continue;
+      const std::vector<int> doomed = faces_off_largest_wedge(v);
+      for (int f : doomed) touched.insert(touched.end(), faces[f].v.begin(), faces[f].v.end());
+      drop_faces(doomed);
+    }
+  }
+  // The faces round v that are not in its largest wedge (faces joined across edges at v).
+  std::vector<int> faces_off_largest_wedge(int v) const {
+    const std::vector<int>& star = verts[v].faces;
+    std::vector<int> wedge(star.size(), -1);
+    std::vector<int> size;
+    for (std::size_t s0 = 0; s0 < star.size(); ++s0) {
+      if (wedge[s0] >= 0) continue;
+      const int w = static_cast<int>(size.size());
+      size.push_back(0);
+      std::vector<std::size_t> stack{s0};
+      wedge[s0] = w;
+      while (!stack.empty()) {
+        const std::size_t s = stack.back();
+        stack.pop_back();
+        ++size[w];
+        for (std::size_t t = 0; t < star.size(); ++t)
+          if (wedge[t] < 0 && share_edge_at(star[s], star[t], v)) wedge[t] = w, stack.push_back(t);
+      }
+    }
+    std::vector<int> off;
+    if (size.size() < 2) return off;
+    const int keep = static_cast<int>(std::max_element(size.begin(), size.end()) - size.begin());
+    for (std::size_t s = 0; s < star.size(); ++s)
+      if (wedge[s] != keep) off.push_back(star[s]);
+    return off;
+  }
+  // True if faces f and g share an edge that ends at v.
+  bool share_edge_at(int f, int g, int v) const {
+    for (int a : faces[f].v)
+      if (a != v)
+        for (int b : faces[g].v)
+          if (a == b) return true;
+    return false;
+  }
+
   bool cut_ring(const std::vector<int>& ring,
                 const std::unordered_map<int, std::array<int, 3>>& cand,
                 const ImplicitSurface& surface) {
@@ -1251,8 +1341,10 @@ SpringNetwork::SpringNetwork(const Mesh& start, const ParticleOptions& options)
     if (n > 1) throw InvalidInputError("particles: start mesh is not consistently oriented");
     if (!count.count(m.edge_key_directed(b, a))) m.verts[a].boundary = m.verts[b].boundary = true;
   }
-  for (auto& v : m.verts)
+  for (auto& v : m.verts) {
     if (v.faces.empty()) v.alive = false, ++m.dead_verts;
+    m.has_border_ = m.has_border_ || (v.alive && v.boundary);
+  }
   m.rebuild_springs();
 }
 
@@ -1435,6 +1527,8 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
   }
 
   if (o.topology_change && m.any_topo_ && m.remove_lost_particles(surface) > 0) ++rep.fallback_cuts;
+  if (!o.topology_change && m.has_border_ && m.open_holes_at_lost_particles() > 0)
+    ++rep.fallback_cuts;
   if (rep.cuts + rep.fallback_cuts > 0) {
     m.evaluate_all(surface);
     m.untangle_turned_faces(surface);

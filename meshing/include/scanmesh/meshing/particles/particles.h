@@ -88,7 +88,8 @@ struct ParticleOptions {
 struct StepReport {
   int collapses = 0, splits = 0, flips = 0, special_collapses = 0;
   int cuts = 0;           //!< §4.4 ring cuts (eq. 25, two closing fans)
-  int fallback_cuts = 0;  //!< removals of lost particles / spanning bands (gap decisions 25-26)
+  int fallback_cuts = 0;  //!< removals of lost particles / spanning bands (gap decisions 25-26;
+                          //!< in scan mode the holes opened at lost particles, decision 43)
   int new_topology_marks = 0;
   double max_tangential_move = 0.0;  //!< largest |dt * tangential velocity| (mm)
   double max_constraint = 0.0;       //!< largest |F|/|grad F| before the step (mm)
