@@ -9,6 +9,7 @@
 #include "scanmesh/acquisition/session.h"
 #include "scanmesh/core/errors.h"
 #include "scanmesh/sim/sim_camera.h"
+#include "core/test_util.h"
 #include "session_compare.h"
 
 namespace scanmesh {
@@ -16,9 +17,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// A folder in this test process's own temporary directory, which goes when the process ends
+// (it used to stay behind in /tmp, one per test run).
 fs::path scratch(const std::string& name) {
-  const fs::path d =
-      fs::temp_directory_path() / ("scanmesh_test_session_" + std::to_string(getpid())) / name;
+  static const test::TempDir root;
+  const fs::path d = root / name;
   fs::remove_all(d);
   return d;
 }

@@ -13,6 +13,7 @@
 #include <string>
 
 #include "../meshing/remeshing/remesh_test_meshes.h"
+#include "core/test_util.h"
 #include "scanmesh/core/mesh_io.h"
 #include "scanmesh_test_paths.h"
 
@@ -107,10 +108,8 @@ TEST(CliRemeshScan, ReadmeCommandOnTheDemoMeshNeedsNoFlags) {
 
 // Meshes other tools write: OFF, OBJ and STL go through info, check, render and remesh alike.
 TEST(CliRemesh, ReadsOffObjAndStl) {
-  const fs::path dir =
-      fs::temp_directory_path() / ("scanmesh_test_cli_formats_" + std::to_string(getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const test::TempDir scratch;  // removed even when an assertion ends the test early
+  const fs::path& dir = scratch.path();
   const Mesh boxes = test::two_boxes(10, 4);
   Mesh box;  // one closed box (STL and OBJ have no face labels or seams)
   for (std::size_t f = 0; f < boxes.triangles.size(); ++f)
@@ -155,7 +154,6 @@ TEST(CliRemesh, ReadsOffObjAndStl) {
     ASSERT_EQ(code, 0) << name << ": " << out;
     EXPECT_EQ(read_ply(dir / (std::string(name) + "_r") / "mesh.ply").positions.size(), 150u);
   }
-  fs::remove_all(dir);
 }
 
 }  // namespace
