@@ -19,6 +19,9 @@ using Eigen::Vector3d;
 
 namespace {
 
+// Decision 44: untangling moves after which a particle stops following its springs.
+constexpr int kUntanglesBeforeSettling = 3;
+
 std::uint64_t edge_key(int a, int b) {
   if (a > b) std::swap(a, b);
   return (static_cast<std::uint64_t>(a) << 32) | static_cast<std::uint32_t>(b);
@@ -40,6 +43,11 @@ struct Vertex {
   bool alive = true;
   bool boundary = false;  // on an open border (scan mode): pinned, never remeshed
   bool defined = false;   // F could be evaluated at p this step
+  // Decision 44 (scan mode, relax() past the flip freeze): untangling moves so far, the
+  // previous step's undamped move, and the factor on the move (halved when it turns back).
+  int untangled = 0;
+  Vector3d last_move = Vector3d::Zero();
+  double damping = 1.0;
   ImplicitValue f;
   std::vector<int> faces;
 };
@@ -475,13 +483,11 @@ struct SpringNetwork::Impl {
   // ---- Turned border triangles (scan mode; an addition, docs/particles.md, decision 38) ---
   // Where the range surface ends (grid holes, occlusion borders) a triangle at a border can
   // end up turned over against the surface normal: its border particles slide along their
-  // border chord and cannot untangle it. Such a triangle is dropped (the border moves inwards)
-  // when that keeps the mesh a manifold: it has a border edge whose opposite particle is
-  // interior, or two border edges (their shared particle goes with it), or a border edge whose
-  // opposite particle is on the border too (that particle keeps its larger wedge). A turned triangle
-  // that touches the border only at a particle goes with that particle's whole fan, if the
-  // fan's rim is interior but for the particle's two border neighbours. Returns the number of
-  // triangles dropped.
+  // border chord and cannot untangle it. Such a triangle is dropped (the border moves
+  // inwards): alone when it has a border edge (a particle left with no face goes too); with
+  // the whole fan of a border corner whose fan's rim is interior but for its two border
+  // neighbours; otherwise alone, its corners keeping their larger wedges (decision 43), so
+  // the mesh stays a manifold. Returns the number of triangles dropped.
   int drop_turned_border_faces(const ImplicitSurface& surface) {
     int dropped = 0;
     for (int round = 0; round < 8; ++round) {
@@ -489,27 +495,26 @@ struct SpringNetwork::Impl {
       for (std::size_t f = 0; f < faces.size(); ++f) {
         if (!faces[f].alive || !turned_over(faces[f].v, surface)) continue;
         const auto t = faces[f].v;
-        int border_edges = 0, opposite_of_border = -1;
+        int border_edges = 0;
         for (int k = 0; k < 3; ++k)
-          if (edge_faces(t[k], t[(k + 1) % 3]).size() == 1)
-            ++border_edges, opposite_of_border = t[(k + 2) % 3];
-        if (border_edges > 0) {
-          // With one border edge and the opposite particle on another stretch of border, the
-          // drop leaves that particle a bow-tie: it keeps its larger wedge (decision 43).
-          const std::size_t before = dead_faces;
-          drop_faces({static_cast<int>(f)});
-          if (border_edges == 1 && verts[opposite_of_border].boundary)
-            separate_wedges({opposite_of_border});
-          this_round += static_cast<int>(dead_faces - before);
-          continue;
-        }
-        for (int v : t)
-          if (verts[v].boundary && fan_rim_is_interior(v)) {
-            const std::vector<int> fan = verts[v].faces;
+          border_edges += edge_faces(t[k], t[(k + 1) % 3]).size() == 1 ? 1 : 0;
+        if (border_edges == 0) {
+          const auto fan_corner = std::find_if(t.begin(), t.end(), [&](int v) {
+            return verts[v].boundary && fan_rim_is_interior(v);
+          });
+          if (fan_corner != t.end()) {
+            const std::vector<int> fan = verts[*fan_corner].faces;
             drop_faces(fan);
             this_round += static_cast<int>(fan.size());
-            break;
+            continue;
           }
+          if (std::none_of(t.begin(), t.end(), [&](int v) { return verts[v].boundary; }))
+            continue;  // interior folds are not touched
+        }
+        const std::size_t before = dead_faces;
+        drop_faces({static_cast<int>(f)});
+        separate_wedges({t.begin(), t.end()});
+        this_round += static_cast<int>(dead_faces - before);
       }
       if (this_round == 0) break;
       dropped += this_round;
@@ -763,6 +768,11 @@ struct SpringNetwork::Impl {
   }
   bool any_topo_ = false;
   bool has_border_ = false;  // scan mode: the start mesh had borders (decision 43)
+  // Scan mode, relax() past the flip freeze (decision 44): moves that turn back are damped
+  // and particles the untangling keeps taking back settle; past twice the flip freeze no
+  // Rule 1-2 operation either.
+  bool calming_ = false;
+  bool rules_frozen_ = false;
   // Sorted spring keys (deterministic processing order), rebuilt only after the spring set
   // changed: sorting every step was a quarter of the run time.
   std::vector<std::uint64_t> keys_;
@@ -866,10 +876,12 @@ struct SpringNetwork::Impl {
         const int before = turned_faces_around(v);
         const Vector3d old = verts[v].p;
         verts[v].p = c;
-        if (turned_faces_around(v) < before)
+        if (turned_faces_around(v) < before) {
           ++moved_now;
-        else
+          if (calming_) ++verts[v].untangled;
+        } else {
           verts[v].p = old;
+        }
       }
       moved += moved_now;
       if (moved_now == 0) break;
@@ -1412,7 +1424,11 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
     if (!v.alive || !v.defined) continue;  // Gap: a particle where F is undefined waits
     const Vector3d g = v.f.gradient;
     const double g2 = g.squaredNorm();
-    Vector3d p_target = v.boundary ? Vector3d::Zero() : force[i];
+    // Decision 44: in calming, a particle the untangling had to move back again and again
+    // (a rough surface whose gradient turns within a spring's length: the springs push it
+    // into a turned position, the untangling takes it out) keeps only the constraint part.
+    const bool settled = m.calming_ && v.untangled >= kUntanglesBeforeSettling;
+    Vector3d p_target = v.boundary || settled ? Vector3d::Zero() : force[i];
     if (v.boundary)
       if (const auto it = border_dir.find(static_cast<int>(i)); it != border_dir.end())
         p_target = force[i].dot(it->second) * it->second;
@@ -1440,6 +1456,14 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
           move = normal_part + tangential;
           break;
         }
+    }
+    if (m.calming_) {
+      // Decision 44: a move that turns back on the previous one (a 2-cycle of the Newton step
+      // between two bumps of a rough surface) is damped, more each time it happens again.
+      const bool reverses = move.dot(v.last_move) < -0.5 * move.norm() * v.last_move.norm();
+      v.damping = reverses ? std::max(v.damping * 0.5, 1.0 / 64) : std::min(1.0, v.damping * 1.25);
+      v.last_move = move;
+      move *= v.damping;
     }
     v.p += move;
   }
@@ -1472,6 +1496,7 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
 
 
   // Rules 1-4: collapse (14) / split (15) settled (16), unmarked (Rule 3) springs.
+  if (m.rules_frozen_) rule_candidates.clear();
   for (std::uint64_t k : rule_candidates) {
     const auto it = m.springs.find(k);
     if (it == m.springs.end()) continue;
@@ -1550,6 +1575,7 @@ int SpringNetwork::relax(const ImplicitSurface& surface, std::size_t target_vert
   const bool topology_change = m.o.topology_change;
   const bool flips = m.o.flips;
   m.o.topology_change = false;
+  for (Vertex& v : m.verts) v.untangled = 0, v.last_move.setZero(), v.damping = 1.0;
   // Isotropic remeshing rounds first (an addition, docs/particles.md): they bring the start
   // mesh near the spring equilibrium in a few sweeps, which explicit Euler needs hundreds of
   // steps for. Stop early once a round changes nothing.
@@ -1567,7 +1593,11 @@ int SpringNetwork::relax(const ImplicitSurface& surface, std::size_t target_vert
     }
     // Freeze the flips after `flip_freeze` steps (decision 34): on scans the flips and the
     // collapses of Rule 1 kept undoing each other somewhere (never converged in 3,000 steps).
-    if (m.o.flip_freeze > 0 && n == m.o.flip_freeze) m.o.flips = false;
+    if (m.o.flip_freeze > 0 && n == m.o.flip_freeze) {
+      m.o.flips = false;
+      m.calming_ = m.has_border_;
+    }
+    if (m.o.flip_freeze > 0 && n == 2 * m.o.flip_freeze) m.rules_frozen_ = m.has_border_;
     if (m.o.progress && n % 10 == 0) m.o.progress(n, m.o.max_iterations);
     const StepReport r = step(surface);
     if (r.changed() || m.verts.size() != window.size()) {
@@ -1610,6 +1640,8 @@ int SpringNetwork::relax(const ImplicitSurface& surface, std::size_t target_vert
   }
   m.o.topology_change = topology_change;
   m.o.flips = flips;
+  m.calming_ = false;
+  m.rules_frozen_ = false;
   project(surface);
   // Scan mode (a mesh with borders): no triangle may stay turned over at a border.
   if (std::any_of(m.verts.begin(), m.verts.end(),
