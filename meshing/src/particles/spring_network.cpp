@@ -41,7 +41,7 @@ struct Vertex {
   Vector3d p = Vector3d::Zero();
   std::uint64_t id = 0;
   bool alive = true;
-  bool boundary = false;  // on an open border (scan mode): pinned, never remeshed
+  bool boundary = false;  // on an open border (scan mode): slides along it (decision 19)
   bool defined = false;   // F could be evaluated at p this step
   // Decision 44 (scan mode, relax() past the flip freeze): untangling moves so far, the
   // previous step's undamped move, and the factor on the move (halved when it turns back).
@@ -327,6 +327,8 @@ struct SpringNetwork::Impl {
     }
     verts[a].p = m;
     verts[a].id = next_id++;  // a merged particle is a new particle (docs/particles.md)
+    verts[a].untangled = 0, verts[a].damping = 1.0, verts[a].last_move.setZero();
+    if (static_cast<std::size_t>(a) < lost_steps_.size()) lost_steps_[a] = 0;
     kill_vertex(b);
     for (int x : neighbors(a)) mark(a, x);
     return true;
@@ -484,10 +486,11 @@ struct SpringNetwork::Impl {
   // Where the range surface ends (grid holes, occlusion borders) a triangle at a border can
   // end up turned over against the surface normal: its border particles slide along their
   // border chord and cannot untangle it. Such a triangle is dropped (the border moves
-  // inwards): alone when it has a border edge (a particle left with no face goes too); with
-  // the whole fan of a border corner whose fan's rim is interior but for its two border
-  // neighbours; otherwise alone, its corners keeping their larger wedges (decision 43), so
-  // the mesh stays a manifold. Returns the number of triangles dropped.
+  // inwards) when it touches the border: with the whole fan of a border corner whose fan's
+  // rim is interior but for its two border neighbours, when it has no border edge and there
+  // is such a corner; otherwise alone, with whatever smaller wedge one of its corners is left
+  // with (decision 43), so the mesh stays a manifold (a particle left with no face goes too).
+  // Interior folds are left to the untangling. Returns the number of triangles dropped.
   int drop_turned_border_faces(const ImplicitSurface& surface) {
     int dropped = 0;
     for (int round = 0; round < 8; ++round) {
@@ -770,7 +773,7 @@ struct SpringNetwork::Impl {
   bool has_border_ = false;  // scan mode: the start mesh had borders (decision 43)
   // Scan mode, relax() past the flip freeze (decision 44): moves that turn back are damped
   // and particles the untangling keeps taking back settle; past twice the flip freeze no
-  // Rule 1-2 operation either.
+  // Rule 1-2 split or collapse either (the density correction at convergence still runs).
   bool calming_ = false;
   bool rules_frozen_ = false;
   // Sorted spring keys (deterministic processing order), rebuilt only after the spring set
@@ -791,8 +794,9 @@ struct SpringNetwork::Impl {
   int fallback_cuts_ = 0;
   bool converged = false;  // the last relax() met its convergence test
   int candidate_steps_ = 0;
-  std::vector<int> lost_steps_;  // per particle: consecutive steps farther than R from F = 0  //
-                                 // consecutive steps with ring candidates but no clean ring
+  // Per particle: consecutive steps farther than R from F = 0 (in scan mode also: with F
+  // undefined; decisions 25 and 43).
+  std::vector<int> lost_steps_;
 
   int fast_valence(int v) const {
     return static_cast<int>(verts[v].faces.size()) + (verts[v].boundary ? 1 : 0);
@@ -1150,18 +1154,13 @@ struct SpringNetwork::Impl {
   // between separated parts) is removed with its triangles, and every hole this opens is
   // closed by a fan to a new particle at the hole's centroid, as in the ring cut.
   int remove_lost_particles(const ImplicitSurface& surface) {
-    std::vector<int> lost;
-    lost_steps_.resize(verts.size(), 0);
-    for (std::size_t i = 0; i < verts.size(); ++i) {
-      const Vertex& v = verts[i];
-      if (!v.alive || v.boundary || !v.defined) continue;
+    // Patience as for the ring (§4.4 Step 3 usually removes such particles with its ring):
+    // only a particle that stays lost is removed here.
+    const std::vector<int> lost = lost_for_longer_than_patience([&](const Vertex& v) {
+      if (v.boundary || !v.defined) return false;
       const double g = v.f.gradient.norm();
-      const bool far = g < 1e-10 ? v.f.value > 0.0 : std::abs(v.f.value) > R() * g;
-      // Patience as for the ring (§4.4 Step 3 usually removes such particles with its ring):
-      // only a particle that stays lost is removed here.
-      lost_steps_[i] = far ? lost_steps_[i] + 1 : 0;
-      if (lost_steps_[i] > o.ring_patience) lost.push_back(static_cast<int>(i));
-    }
+      return g < 1e-10 ? v.f.value > 0.0 : std::abs(v.f.value) > R() * g;
+    });
     if (lost.empty()) return 0;
     for (int v : lost) {
       const std::vector<int> around = verts[v].faces;
@@ -1181,15 +1180,8 @@ struct SpringNetwork::Impl {
   // than R from F = 0 to first order) for more than `ring_patience` steps is removed with its
   // triangles, and the hole stays open: it is a border of the data, not of the object.
   int open_holes_at_lost_particles() {
-    std::vector<int> lost;
-    lost_steps_.resize(verts.size(), 0);
-    for (std::size_t i = 0; i < verts.size(); ++i) {
-      const Vertex& v = verts[i];
-      if (!v.alive) continue;
-      const bool lost_now = !v.defined || farther_than_R(v.f);
-      lost_steps_[i] = lost_now ? lost_steps_[i] + 1 : 0;
-      if (lost_steps_[i] > o.ring_patience) lost.push_back(static_cast<int>(i));
-    }
+    const std::vector<int> lost = lost_for_longer_than_patience(
+        [&](const Vertex& v) { return !v.defined || farther_than_R(v.f); });
     if (lost.empty()) return 0;
     std::vector<int> doomed;
     for (int v : lost) doomed.insert(doomed.end(), verts[v].faces.begin(), verts[v].faces.end());
@@ -1203,6 +1195,19 @@ struct SpringNetwork::Impl {
     separate_wedges(std::move(rim));
     rebuild_springs();
     return static_cast<int>(lost.size());
+  }
+  // Counts, per alive particle, the consecutive steps `lost_now` holds; returns the particles
+  // it has held for more than `ring_patience` steps.
+  template <class Lost>
+  std::vector<int> lost_for_longer_than_patience(Lost&& lost_now) {
+    std::vector<int> lost;
+    lost_steps_.resize(verts.size(), 0);
+    for (std::size_t i = 0; i < verts.size(); ++i) {
+      if (!verts[i].alive) continue;
+      lost_steps_[i] = lost_now(verts[i]) ? lost_steps_[i] + 1 : 0;
+      if (lost_steps_[i] > o.ring_patience) lost.push_back(static_cast<int>(i));
+    }
+    return lost;
   }
   // First-order distance |F| / |grad F| beyond R (a vanishing gradient counts as far).
   bool farther_than_R(const ImplicitValue& f) const {
@@ -1221,6 +1226,15 @@ struct SpringNetwork::Impl {
       for (int f : doomed) touched.insert(touched.end(), faces[f].v.begin(), faces[f].v.end());
       drop_faces(doomed);
     }
+  }
+  // Every particle keeps only its largest wedge of faces.
+  void make_vertex_manifold() {
+    const std::size_t before = dead_faces;
+    std::vector<int> all;
+    for (std::size_t i = 0; i < verts.size(); ++i)
+      if (verts[i].alive) all.push_back(static_cast<int>(i));
+    separate_wedges(std::move(all));
+    if (dead_faces != before) rebuild_springs();
   }
   // The faces round v that are not in its largest wedge (faces joined across edges at v).
   std::vector<int> faces_off_largest_wedge(int v) const {
@@ -1421,7 +1435,9 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
   const double cap = o.max_step * m.R();
   for (std::size_t i = 0; i < m.verts.size(); ++i) {
     Vertex& v = m.verts[i];
-    if (!v.alive || !v.defined) continue;  // Gap: a particle where F is undefined waits
+    // Gap: a particle where F is undefined waits (in scan mode, for ring_patience steps;
+    // then it is removed, decision 43).
+    if (!v.alive || !v.defined) continue;
     const Vector3d g = v.f.gradient;
     const double g2 = g.squaredNorm();
     // Decision 44: in calming, a particle the untangling had to move back again and again
@@ -1576,6 +1592,7 @@ int SpringNetwork::relax(const ImplicitSurface& surface, std::size_t target_vert
   const bool flips = m.o.flips;
   m.o.topology_change = false;
   for (Vertex& v : m.verts) v.untangled = 0, v.last_move.setZero(), v.damping = 1.0;
+  m.lost_steps_.clear();
   // Isotropic remeshing rounds first (an addition, docs/particles.md): they bring the start
   // mesh near the spring equilibrium in a few sweeps, which explicit Euler needs hundreds of
   // steps for. Stop early once a round changes nothing.
@@ -1593,6 +1610,8 @@ int SpringNetwork::relax(const ImplicitSurface& surface, std::size_t target_vert
     }
     // Freeze the flips after `flip_freeze` steps (decision 34): on scans the flips and the
     // collapses of Rule 1 kept undoing each other somewhere (never converged in 3,000 steps).
+    // Scan mode also calms what still cycles from then on, and stops Rules 1-2 at twice that
+    // (decision 44).
     if (m.o.flip_freeze > 0 && n == m.o.flip_freeze) {
       m.o.flips = false;
       m.calming_ = m.has_border_;
@@ -1643,10 +1662,14 @@ int SpringNetwork::relax(const ImplicitSurface& surface, std::size_t target_vert
   m.calming_ = false;
   m.rules_frozen_ = false;
   project(surface);
-  // Scan mode (a mesh with borders): no triangle may stay turned over at a border.
+  // Scan mode (a mesh with borders): no triangle may stay turned over at a border, and no
+  // particle may join two wedges of faces (a bow-tie at a border: 3 on the 128 x 128 head;
+  // where they come from is not traced; decision 43).
   if (std::any_of(m.verts.begin(), m.verts.end(),
-                  [](const Vertex& v) { return v.alive && v.boundary; }))
+                  [](const Vertex& v) { return v.alive && v.boundary; })) {
     m.drop_turned_border_faces(surface);
+    m.make_vertex_manifold();
+  }
   return n;
 }
 

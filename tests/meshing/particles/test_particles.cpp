@@ -629,6 +629,30 @@ std::pair<std::size_t, std::size_t> turned_triangles(const Mesh& m,
   return {turned, checked};
 }
 
+// Checks a scan-mode mesh: no non-manifold edge or vertex, consistently oriented, every vertex
+// where F is defined on F = 0 (first order, to 1e-6 mm). Returns the vertices where F is
+// defined and the longest edge over R.
+std::pair<std::size_t, double> expect_manifold_on_surface(const Mesh& m,
+                                                          const ImplicitSurface& implicit,
+                                                          double R) {
+  const MeshCheckReport check = check_mesh(m, {.self_intersections = false});
+  EXPECT_EQ(check.topology.nonmanifold_edges, 0u);
+  EXPECT_EQ(check.nonmanifold_vertices, 0u);
+  EXPECT_EQ(check.topology.inconsistent_edges, 0u);
+  std::size_t defined = 0;
+  for (const auto& p : m.positions) {
+    const auto f = implicit.evaluate(p);
+    if (!f) continue;
+    ++defined;
+    EXPECT_LT(std::abs(f->value) / f->gradient.norm(), 1e-6);
+  }
+  double longest = 0.0;
+  for (const auto& t : m.triangles)
+    for (int k = 0; k < 3; ++k)
+      longest = std::max(longest, (m.positions[t[k]] - m.positions[t[(k + 1) % 3]]).norm());
+  return {defined, longest / R};
+}
+
 // Issue 7, scan mode on the full simulated head (built-in head scene and scanner, grid reduced
 // to 128 x 128 with the same height range; cleaned like `scanmesh clean`). Before decisions
 // 34-35 relax() hit its 3,000-iteration limit here (flips and Rule 1 collapses undoing each
@@ -641,18 +665,10 @@ TEST(ScanMode, SimulatedHeadConvergesToAManifoldMeshOnTheRangeSurface) {
   EXPECT_TRUE(r.converged) << r.iterations << " iterations";
   const Mesh& m = r.mesh;
   ASSERT_GT(m.vertex_count(), 2000u);
-  const TopologyStats st = topology_stats(m);
-  EXPECT_EQ(st.nonmanifold_edges, 0u);
-  EXPECT_EQ(st.inconsistent_edges, 0u);
-  // Every vertex where the range surface is defined lies on it (first-order distance); border
-  // particles can sit where the bicubic patch just ends (F undefined).
-  std::size_t defined = 0;
-  for (const auto& p : m.positions) {
-    const auto f = implicit.evaluate(p);
-    if (!f) continue;
-    ++defined;
-    EXPECT_LT(std::abs(f->value) / f->gradient.norm(), 1e-6);
-  }
+  // Every vertex where the range surface is defined lies on it (first-order distance). Since
+  // decision 43 a particle where F stays undefined is removed, but one that slid off the end
+  // of a patch within its last `ring_patience` steps can remain.
+  const std::size_t defined = expect_manifold_on_surface(m, implicit, 4.0).first;
   EXPECT_GE(defined, m.vertex_count() * 97 / 100);
   // Orientation against the grid surface's outward normal at each triangle's centroid: none
   // turned over (decision 38 drops the turned triangles at borders; before it 7 of 8,296, all
@@ -705,8 +721,8 @@ TEST(ScanMode, CoarseHeadConvergesWithoutTurnedTriangles) {
 // The full-resolution head (512 x 512, the CLI's default scanner and the one without defects)
 // converges (issue 31). Before decision 43 neither did within 3,000 iterations: under the nose
 // the grid steps 17 mm between two rows, the start mesh spanned the step, and the particles
-// there never settled (the nose grew from 34 to 4,200 particles). The time is bounded in
-// bench_particles, not here.
+// there never settled (the nose grew from 34 to 4,200 particles). The time is measured
+// against a bound in bench_particles, not here.
 TEST(ScanMode, FullResolutionHeadConvergesWithTheStepsOpen) {
   sim::ScannerConfig ideal = sim::builtin_head_scanner();
   ideal.noise_sigma_mm = 0.05;
@@ -720,23 +736,21 @@ TEST(ScanMode, FullResolutionHeadConvergesWithTheStepsOpen) {
     EXPECT_TRUE(r.converged) << r.iterations << " iterations";
     const Mesh& m = r.mesh;
     ASSERT_GT(m.vertex_count(), 4000u);
-    const MeshCheckReport check = check_mesh(m, {.self_intersections = false});
-    const TopologyStats& st = check.topology;
-    EXPECT_EQ(st.nonmanifold_edges, 0u);
-    EXPECT_EQ(check.nonmanifold_vertices, 0u);
-    EXPECT_EQ(st.inconsistent_edges, 0u);
+    // No particle left hanging across a step: every one on the surface (a particle where F
+    // is undefined is removed, decision 43), and no spring spans a step (the longest edge is
+    // printed below; the rules split springs above 1.45 R).
+    const auto [defined, longest] = expect_manifold_on_surface(m, implicit, 4.0);
+    EXPECT_EQ(defined, m.vertex_count());
+    EXPECT_LT(longest, 2.0);
     const auto [turned, checked] = turned_triangles(m, implicit);
     EXPECT_EQ(turned, 0u);
     EXPECT_GT(checked, m.triangles.size() * 97 / 100);
-    // Every particle where F is defined is on F = 0 (none left hanging across a step).
-    for (const auto& p : m.positions) {
-      const auto f = implicit.evaluate(p);
-      if (!f) continue;
-      ASSERT_LT(std::abs(f->value) / f->gradient.norm(), 1e-6);
-    }
-    std::printf("512 x 512 head (%s): %zu vertices, %d iterations, %zu border loops\n",
+    const TopologyStats st = topology_stats(m);
+    EXPECT_GE(st.boundary_loops, 8u);  // top, neck and the holes of the data: 10 and 26
+    std::printf("512 x 512 head (%s): %zu vertices, %d iterations, %zu border loops, longest "
+                "edge %.2f R\n",
                 scanner.hair ? "hair" : "ideal", m.vertex_count(), r.iterations,
-                st.boundary_loops);
+                st.boundary_loops, longest);
   }
 }
 
@@ -753,16 +767,12 @@ TEST(ScanMode, FilledRoughHairZoneSettles) {
   const ScanImplicitSurface implicit(surface);
   const ParticleMeshResult r = particle_mesh(implicit, {.edge_length = 4.0});
   EXPECT_TRUE(r.converged) << r.iterations << " iterations";
+  // The calming starts at the flip freeze (iteration 500): this run must get there, or it
+  // does not test decision 44 (measured 582 iterations).
+  EXPECT_GT(r.iterations, 500);
   const Mesh& m = r.mesh;
-  const MeshCheckReport check = check_mesh(m, {.self_intersections = false});
-  EXPECT_EQ(check.topology.nonmanifold_edges, 0u);
-  EXPECT_EQ(check.nonmanifold_vertices, 0u);
-  EXPECT_EQ(check.topology.inconsistent_edges, 0u);
-  for (const auto& p : m.positions) {
-    const auto f = implicit.evaluate(p);
-    if (!f) continue;
-    ASSERT_LT(std::abs(f->value) / f->gradient.norm(), 1e-6);
-  }
+  const auto [defined, longest] = expect_manifold_on_surface(m, implicit, 4.0);
+  EXPECT_EQ(defined, m.vertex_count());
   // The filled head is meshed nearly whole: measured 99.7 % of the grid mesh's area.
   const auto area = [](const Mesh& mesh) {
     double a = 0.0;

@@ -46,7 +46,9 @@ struct ParticleOptions {
   double epsilon1 = 0.05;           //!< eq. (25.2): shared-edge midpoint at least eps1 * R outside
   double epsilon2 = 0.0;            //!< eq. (25.3): cosine between end-point gradients below this
   //! §4.4 Step 3: steps a band of ring candidates may persist without forming a clean ring
-  //! before the fallback removes it wholesale (gap decision 26).
+  //! before the fallback removes it wholesale (gap decision 26); also the steps a particle
+  //! may stay lost (far from F = 0; in scan mode also where F is undefined) before it is
+  //! removed (decisions 25 and 43).
   int ring_patience = 10;
   double max_step = 0.5;  //!< displacement cap per step, fraction of R (stability guard)
   //! relax(): converged after 10 consecutive steps with no collapse, split, flip or cut in
@@ -75,7 +77,8 @@ struct ParticleOptions {
   //! this many steps to cancel against other defects (docs/particles.md, decision 33; 0: off).
   int max_glide = 0;
   //! relax(): flips stop after this many spring iterations so flip/collapse cycles cannot
-  //! keep it from converging (docs/particles.md, decision 34; 0: never).
+  //! keep it from converging (docs/particles.md, decision 34; 0: never). In scan mode moves
+  //! that still cycle are calmed from then on, and Rules 1-2 stop at twice this (decision 44).
   int flip_freeze = 500;
   std::uint64_t seed = 1;  //!< reserved (CLI --seed); the spring network uses no randomness
   //! Progress display (optional): every full-resolution relax() calls it every 10 iterations
@@ -118,7 +121,9 @@ class SpringNetwork {
   //! then projects every vertex onto the surface (Newton, eq. 8 with P = 0). Returns the
   //! number of iterations. `target_vertices` > 0 replaces the mean-stretch density correction
   //! (docs/particles.md, decision 13) by one towards that many particles (up to 8 rounds of
-  //! collapses or splits; the count can end near it).
+  //! collapses or splits; the count can end near it). On a mesh with borders (scan mode) it
+  //! also removes particles that stay lost, leaving the holes open (decision 43), and drops
+  //! triangles left turned over at a border (decision 38).
   int relax(const ImplicitSurface& surface, std::size_t target_vertices = 0);
   //! Newton projection of every vertex (no tangential motion).
   void project(const ImplicitSurface& surface);
