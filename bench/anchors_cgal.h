@@ -78,15 +78,6 @@ inline bool to_cgal(const Mesh& m, CgalSurfaceMesh& sm) {
   return true;
 }
 
-inline double surface_area(const Mesh& m) {
-  double area = 0;
-  for (const auto& t : m.triangles)
-    area +=
-        0.5 *
-        (m.positions[t[1]] - m.positions[t[0]]).cross(m.positions[t[2]] - m.positions[t[0]]).norm();
-  return area;
-}
-
 struct CgalRemeshRun {
   Mesh mesh;
   double seconds = 0;      //!< of the last (kept) run

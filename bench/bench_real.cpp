@@ -194,7 +194,7 @@ void compare_remeshers(const Mesh& in) {
     print(r);
     return;
   }
-  const auto cgal = bench::cgal_remesh_to_count(base, bench::surface_area(in), target);
+  const auto cgal = bench::cgal_remesh_to_count(base, scanmesh::surface_area(in), target);
   r.ratio = fmt("%.2f", cgal.seconds / t_ours);
   print(r);
   if (omp_get_max_threads() > 1) {

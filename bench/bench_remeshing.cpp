@@ -77,7 +77,7 @@ void compare(const sim::ScannerConfig& cfg, int target, bool uniform_only) {
     std::printf("CGAL: the prepared head is not a polygon mesh\n");
     return;
   }
-  const auto cgal = bench::cgal_remesh_to_count(base, bench::surface_area(in), target);
+  const auto cgal = bench::cgal_remesh_to_count(base, scanmesh::surface_area(in), target);
   const double cgal_t = cgal.seconds;
   rows.push_back(measure_remesh(
       "CGAL isotropic_remeshing (L = " + std::to_string(cgal.edge_length).substr(0, 5) + " mm)",

@@ -55,6 +55,14 @@ void Mesh::compute_vertex_normals() {
 }
 
 // Flags every face whose three corner positions (as a set) repeat an earlier face's.
+double surface_area(const Mesh& mesh) {
+  const auto& p = mesh.positions;
+  double area = 0.0;
+  for (const auto& t : mesh.triangles)
+    area += 0.5 * (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]).norm();
+  return area;
+}
+
 std::vector<char> faces_repeating_earlier_geometry(const Mesh& mesh) {
   using Corners = std::array<std::array<double, 3>, 3>;
   const auto& F = mesh.triangles;

@@ -49,6 +49,19 @@ Mesh sheet(int n, int m) {
   return mesh;
 }
 
+// A 3 x 2 rectangle in two triangles (plus a degenerate one) has area 6, turned or not.
+TEST(MeshArea, SumsTheTrianglesAndIgnoresDegenerateOnes) {
+  Mesh m;
+  m.positions = {{0, 0, 0}, {3, 0, 0}, {3, 2, 0}, {0, 2, 0}};
+  m.triangles = {{0, 1, 2}, {0, 2, 3}, {0, 1, 1}};
+  EXPECT_DOUBLE_EQ(surface_area(m), 6.0);
+  const Eigen::Matrix3d turn =
+      Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  for (auto& p : m.positions) p = turn * p;
+  EXPECT_NEAR(surface_area(m), 6.0, 1e-12);
+  EXPECT_EQ(surface_area(Mesh{}), 0.0);
+}
+
 class PlyRoundTrip : public ::testing::TestWithParam<PlyEncoding> {};
 
 TEST_P(PlyRoundTrip, KeepsPositionsToFloatPrecisionNormalsColoursAndLabels) {

@@ -48,6 +48,11 @@ struct Vertex {
   int untangled = 0;
   Vector3d last_move = Vector3d::Zero();
   double damping = 1.0;
+  void reset_calming() {
+    untangled = 0;
+    last_move.setZero();
+    damping = 1.0;
+  }
   ImplicitValue f;
   std::vector<int> faces;
 };
@@ -327,7 +332,7 @@ struct SpringNetwork::Impl {
     }
     verts[a].p = m;
     verts[a].id = next_id++;  // a merged particle is a new particle (docs/particles.md)
-    verts[a].untangled = 0, verts[a].damping = 1.0, verts[a].last_move.setZero();
+    verts[a].reset_calming();
     if (static_cast<std::size_t>(a) < lost_steps_.size()) lost_steps_[a] = 0;
     kill_vertex(b);
     for (int x : neighbors(a)) mark(a, x);
@@ -1591,7 +1596,7 @@ int SpringNetwork::relax(const ImplicitSurface& surface, std::size_t target_vert
   const bool topology_change = m.o.topology_change;
   const bool flips = m.o.flips;
   m.o.topology_change = false;
-  for (Vertex& v : m.verts) v.untangled = 0, v.last_move.setZero(), v.damping = 1.0;
+  for (Vertex& v : m.verts) v.reset_calming();
   m.lost_steps_.clear();
   // Isotropic remeshing rounds first (an addition, docs/particles.md): they bring the start
   // mesh near the spring equilibrium in a few sweeps, which explicit Euler needs hundreds of
@@ -1665,8 +1670,7 @@ int SpringNetwork::relax(const ImplicitSurface& surface, std::size_t target_vert
   // Scan mode (a mesh with borders): no triangle may stay turned over at a border, and no
   // particle may join two wedges of faces (a bow-tie at a border: 3 on the 128 x 128 head;
   // where they come from is not traced; decision 43).
-  if (std::any_of(m.verts.begin(), m.verts.end(),
-                  [](const Vertex& v) { return v.alive && v.boundary; })) {
+  if (m.has_border_) {
     m.drop_turned_border_faces(surface);
     m.make_vertex_manifold();
   }
@@ -1758,15 +1762,6 @@ Mesh subdivide(const Mesh& m, const ImplicitSurface& surface) {
   return out;
 }
 
-// Area of a triangle mesh.
-double mesh_area(const Mesh& m) {
-  double area = 0.0;
-  for (const auto& t : m.triangles)
-    area +=
-        0.5 *
-        (m.positions[t[1]] - m.positions[t[0]]).cross(m.positions[t[2]] - m.positions[t[0]]).norm();
-  return area;
-}
 
 // Particles a closed mesh of near-equilateral triangles with edge `edge` needs on `area`:
 // F = 2 (V - chi) triangles of sqrt(3)/4 edge^2 each.
@@ -1987,7 +1982,7 @@ std::vector<CoarseCandidate> coarse_candidates(const ImplicitSurface& surface,
   }
   // The area from the seed subdivided once and projected (the marching-tetrahedra mesh's
   // chords miss ~1 % on a sphere at R / radius = 0.2; this is within ~0.1 %).
-  const double wanted = particles_for_area(mesh_area(subdivide(source, surface)), R, chi);
+  const double wanted = particles_for_area(surface_area(subdivide(source, surface)), R, chi);
   for (int n = 2; n <= options.max_subdivision; ++n) {
     const double coarse_count =
         (wanted - static_cast<double>(chi)) / (n * n) + static_cast<double>(chi);

@@ -56,15 +56,6 @@ int meshed_regions(const RegionGraph& g) {
   return n;
 }
 
-double area(const Mesh& m) {
-  double a = 0;
-  for (const auto& t : m.triangles)
-    a +=
-        0.5 *
-        (m.positions[t[1]] - m.positions[t[0]]).cross(m.positions[t[2]] - m.positions[t[0]]).norm();
-  return a;
-}
-
 // Largest distance, in texture pixels (cells), from a defined cell centre (every second one)
 // to the mesh's footprint in the texture: what the margin and the meshing leave uncovered. In
 // the texture, not in 3D: the 3D distance also measures the chords' deviation from the curved
@@ -260,8 +251,8 @@ TEST(DataBorder, AnimeshOnAQuarterTurnCoversTheDataWithAValidMesh) {
   GridMeshOptions gopt;
   gopt.with_colors = gopt.with_texcoords = false;
   gopt.max_depth_jump_mm = 1e9;  // the AFT meshes across the nose's and chin's jumps too
-  const double grid_area = area(grid_mesh(head.grid, gopt).mesh);
-  const double mesh_area = area(am.mesh);
+  const double grid_area = surface_area(grid_mesh(head.grid, gopt).mesh);
+  const double mesh_area = surface_area(am.mesh);
   EXPECT_GT(mesh_area, 0.93 * grid_area);
   EXPECT_LT(mesh_area, 1.01 * grid_area);
   // Every defined patch within two cells of the mesh (the margin is 1.5).

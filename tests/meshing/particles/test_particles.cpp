@@ -774,15 +774,7 @@ TEST(ScanMode, FilledRoughHairZoneSettles) {
   const auto [defined, longest] = expect_manifold_on_surface(m, implicit, 4.0);
   EXPECT_EQ(defined, m.vertex_count());
   // The filled head is meshed nearly whole: measured 99.7 % of the grid mesh's area.
-  const auto area = [](const Mesh& mesh) {
-    double a = 0.0;
-    for (const auto& t : mesh.triangles)
-      a += 0.5 * (mesh.positions[t[1]] - mesh.positions[t[0]])
-                     .cross(mesh.positions[t[2]] - mesh.positions[t[0]])
-                     .norm();
-    return a;
-  };
-  EXPECT_GT(area(m), 0.95 * area(grid_mesh(grid).mesh));
+  EXPECT_GT(surface_area(m), 0.95 * surface_area(grid_mesh(grid).mesh));
   std::printf("filled 128 x 128 head, R = 4: %zu vertices, %d iterations\n", m.vertex_count(),
               r.iterations);
 }

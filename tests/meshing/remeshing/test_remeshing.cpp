@@ -402,15 +402,6 @@ TEST(Prepare, WeldsNeedlesAndDropsDegenerateFaces) {
   EXPECT_EQ(rep.topology.boundary_loops, 1u);
 }
 
-double surface_area(const Mesh& m) {
-  double area = 0;
-  for (const auto& t : m.triangles)
-    area += 0.5 * (m.positions[t[1]] - m.positions[t[0]])
-                      .cross(m.positions[t[2]] - m.positions[t[0]])
-                      .norm();
-  return area;
-}
-
 // Median of |estimate - truth| / truth over the vertices of the ellipsoid's middle band, where
 // the input's triangles are least stretched.
 double median_relative_error(const Mesh& m, const std::vector<double>& kappa, double a, double b) {

@@ -40,6 +40,9 @@ struct Mesh {
   void compute_vertex_normals();
 };
 
+//! Sum of the triangles' areas (degenerate ones add 0).
+double surface_area(const Mesh& mesh);
+
 //! One flag per face: its three corner positions (as a set) repeat an earlier face's. Lets
 //! drawing and intersection tests treat n copies of one triangle as one (O(F log F)).
 std::vector<char> faces_repeating_earlier_geometry(const Mesh& mesh);
