@@ -91,8 +91,8 @@ void NmMesh::replace_corner(int f, int from, int to) {
     }
 }
 
-std::vector<int> NmMesh::edge_faces(int v, int w) const {
-  std::vector<int> out;
+EdgeFaceList NmMesh::edge_faces(int v, int w) const {
+  EdgeFaceList out;
   for (int f : vfaces[v]) {
     const auto& t = tri[f];
     if (t[0] == w || t[1] == w || t[2] == w) out.push_back(f);
@@ -109,9 +109,8 @@ int NmMesh::edge_face_count(int v, int w) const {
   return n;
 }
 
-std::vector<int> NmMesh::neighbours(int v) const {
-  std::vector<int> out;
-  out.reserve(8);
+NeighbourList NmMesh::neighbours(int v) const {
+  NeighbourList out;
   for (int f : vfaces[v])
     for (int c : tri[f])
       if (c != v && std::find(out.begin(), out.end(), c) == out.end()) out.push_back(c);

@@ -6,10 +6,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <map>
 #include <numbers>
 #include <queue>
-#include <set>
 #include <sstream>
 #include <unordered_map>
 
@@ -132,8 +130,15 @@ class Remesher {
   // No changed face intersects a live face at one of its corners: prevents
   // folds and local self-intersections instead of repairing them afterwards.
   bool locally_embedded(const std::vector<int>& fs) const;
-  // True when faces t and u, which share one or two corners, provably do not intersect.
-  bool cannot_meet(const std::array<int, 3>& t, const std::array<int, 3>& u) const;
+  // A face near a changed one, with what the pair tests need of it.
+  struct NearFace {
+    int face;
+    std::array<int, 3> corners;
+    Vec3 lo, hi, normal;  // box; (p1 - p0) x (p2 - p0)
+    double length;        // |normal|
+  };
+  // True when faces t and u, which share `shared` corners, provably do not intersect.
+  bool cannot_meet(const NearFace& t, const NearFace& u, int shared) const;
   std::vector<int> fan(int v, int f) const;  // faces of v's side containing f
   int side_valence(int v, int f) const { return static_cast<int>(fan(v, f).size()) - 1; }
   int deviation(int v, int f) const;  // valence minus optimum (0 for branch)
@@ -212,6 +217,8 @@ class Remesher {
   // locally_embedded is checked from the vertex-count phase on: in the adapt phase the mesh is
   // still the dense input, where it doubled the run time and refused nothing (measured).
   bool embed_check_ = false;
+  mutable std::vector<NearFace> near_;   // locally_embedded's scratch
+  mutable std::vector<int> face_mark_;   // per face: its place in near_, or -1
   RemeshStats st_;
 };
 
@@ -388,63 +395,77 @@ bool Remesher::face_ok(int f) const {
 }
 
 bool Remesher::locally_embedded(const std::vector<int>& fs) const {
-  for (int f : fs) {
-    const auto& t = m_.tri[f];
-    Vec3 lo = m_.pos[t[0]], hi = lo;
-    for (int c : t) {
-      lo = lo.cwiseMin(m_.pos[c]);
-      hi = hi.cwiseMax(m_.pos[c]);
+  // Each changed face against each live face sharing a corner with it, every pair once. The
+  // faces around are gathered first, each with its box and normal: a face is met from up to
+  // three changed faces, and two changed faces from both sides (~70 pairs per vertex move; the
+  // check was ~18 % of a remesh when every pair recomputed both).
+  if (face_mark_.size() < m_.tri.size()) face_mark_.resize(m_.tri.size(), -1);
+  near_.clear();
+  auto gather = [&](int h) {
+    if (face_mark_[h] >= 0) return;
+    face_mark_[h] = static_cast<int>(near_.size());
+    NearFace nf;
+    nf.face = h;
+    nf.corners = m_.tri[h];
+    const Vec3 &p0 = m_.pos[nf.corners[0]], &p1 = m_.pos[nf.corners[1]],
+               &p2 = m_.pos[nf.corners[2]];
+    nf.lo = p0.cwiseMin(p1).cwiseMin(p2);
+    nf.hi = p0.cwiseMax(p1).cwiseMax(p2);
+    nf.normal = (p1 - p0).cross(p2 - p0);
+    nf.length = nf.normal.norm();
+    near_.push_back(nf);
+  };
+  for (int f : fs) gather(f);  // the changed faces first: near_[0, k)
+  const std::size_t k = near_.size();
+  for (std::size_t i = 0; i < k; ++i)
+    for (const int c : std::array<int, 3>(near_[i].corners))  // a copy: gather grows near_
+      for (int h : m_.vfaces[c])
+        if (m_.face_alive[h]) gather(h);
+  bool embedded = true;
+  for (std::size_t i = 0; i < k && embedded; ++i) {
+    const NearFace& a = near_[i];
+    for (std::size_t j = 0; j < near_.size() && embedded; ++j) {
+      if (j < k && j <= i) continue;  // itself, or a changed pair met from the other side
+      const NearFace& b = near_[j];
+      int shared = 0;
+      for (int c : a.corners) shared += c == b.corners[0] || c == b.corners[1] || c == b.corners[2];
+      if (shared == 0) continue;
+      if ((b.lo.array() > a.hi.array()).any() || (b.hi.array() < a.lo.array()).any()) continue;
+      if (cannot_meet(a, b, shared)) continue;
+      // Two changed faces were tested in both orders before (the test is exact only up to
+      // rounding, and not symmetric in it).
+      embedded = !triangles_intersect(m_.pos, a.corners, b.corners) &&
+                 !(j < k && triangles_intersect(m_.pos, b.corners, a.corners));
     }
-    // The live faces at f's corners (each once: a face at two corners is tested at the first).
-    for (int i = 0; i < 3; ++i)
-      for (int h : m_.vfaces[t[i]]) {
-        if (h == f || !m_.face_alive[h]) continue;
-        const auto& u = m_.tri[h];
-        bool seen = false;
-        for (int j = 0; j < i && !seen; ++j) seen = u[0] == t[j] || u[1] == t[j] || u[2] == t[j];
-        if (seen) continue;
-        bool apart = false;
-        for (int k = 0; k < 3 && !apart; ++k) {
-          const double a = std::min({m_.pos[u[0]][k], m_.pos[u[1]][k], m_.pos[u[2]][k]});
-          const double b = std::max({m_.pos[u[0]][k], m_.pos[u[1]][k], m_.pos[u[2]][k]});
-          apart = a > hi[k] || b < lo[k];
-        }
-        if (!apart && !cannot_meet(t, u) && triangles_intersect(m_.pos, t, u)) return false;
-      }
   }
-  return true;
+  for (const NearFace& nf : near_) face_mark_[nf.face] = -1;
+  return embedded;
 }
 
-bool Remesher::cannot_meet(const std::array<int, 3>& t, const std::array<int, 3>& u) const {
+bool Remesher::cannot_meet(const NearFace& t, const NearFace& u, int shared) const {
   // Exact shortcuts for the faces of a star, which share corners with the changed face (most
   // of the pairs locally_embedded tests; the full test was ~half of a remesh's time):
   // - a common edge: non-coplanar faces meet only on it, and |cos| < 0.99 is far from coplanar;
   // - a common corner: if the other two corners of one face lie strictly on one side of the
   //   other's plane, the faces touch that plane (and so each other) only at the corner.
   // - no common corner: the corners of one face strictly on one side of the other's plane.
-  int shared = 0;
-  for (int a : t) shared += (a == u[0] || a == u[1] || a == u[2]);
   if (shared == 3) return false;
-  const Vec3 nt = (m_.pos[t[1]] - m_.pos[t[0]]).cross(m_.pos[t[2]] - m_.pos[t[0]]);
-  const Vec3 nu = (m_.pos[u[1]] - m_.pos[u[0]]).cross(m_.pos[u[2]] - m_.pos[u[0]]);
-  const double lt = nt.norm(), lu = nu.norm();
-  if (!(lt > 0 && lu > 0)) return false;
-  if (shared == 2) return std::abs(nt.dot(nu)) < 0.99 * lt * lu;
-  auto strictly_one_side = [&](const std::array<int, 3>& a, const Vec3& n, double ln,
-                               const std::array<int, 3>& b) {
+  if (!(t.length > 0 && u.length > 0)) return false;
+  if (shared == 2) return std::abs(t.normal.dot(u.normal)) < 0.99 * t.length * u.length;
+  auto strictly_one_side = [&](const NearFace& a, const NearFace& b) {
     // The corners of b that are not corners of a, against a's plane (unit normal n / ln).
-    const double tol = 1e-9 * std::sqrt(ln);
+    const double tol = 1e-9 * std::sqrt(a.length);
     int above = 0, below = 0, others = 0;
-    for (int c : b)
-      if (c != a[0] && c != a[1] && c != a[2]) {
-        const double s = n.dot(m_.pos[c] - m_.pos[a[0]]) / ln;
+    for (int c : b.corners)
+      if (c != a.corners[0] && c != a.corners[1] && c != a.corners[2]) {
+        const double s = a.normal.dot(m_.pos[c] - m_.pos[a.corners[0]]) / a.length;
         ++others;
         above += s > tol;
         below += s < -tol;
       }
     return others > 0 && (above == others || below == others);
   };
-  return strictly_one_side(t, nt, lt, u) || strictly_one_side(u, nu, lu, t);
+  return strictly_one_side(t, u) || strictly_one_side(u, t);
 }
 
 std::vector<int> Remesher::fan(int v, int f0) const {
@@ -520,7 +541,7 @@ bool Remesher::collapse(int v, int w) {
   } else if (sv.kind != VertexKind::Free) {
     return ++st_.rejected_topology, false;
   }
-  const std::vector<int> ef = m_.edge_faces(v, w);
+  const auto ef = m_.edge_faces(v, w);
   if (ef.empty()) return false;
   // Generalised link condition: common neighbours are exactly the opposite corners of Star(e).
   std::vector<int> opp;
@@ -583,7 +604,7 @@ bool Remesher::collapse(int v, int w) {
 }
 
 int Remesher::split(int v, int w) {
-  const std::vector<int> ef = m_.edge_faces(v, w);
+  const auto ef = m_.edge_faces(v, w);
   if (ef.empty()) return -1;
   const bool skel = is_skel(v, w);
   VState su;
@@ -634,7 +655,7 @@ int Remesher::split(int v, int w) {
 
 bool Remesher::flip(int v, int w, bool check) {
   if (is_skel(v, w)) return false;
-  const std::vector<int> ef = m_.edge_faces(v, w);
+  const auto ef = m_.edge_faces(v, w);
   if (ef.size() != 2) return false;
   int f1 = ef[0], f2 = ef[1];
   // Orient: f1 = (v, w, a) counter-clockwise.
@@ -690,7 +711,7 @@ bool Remesher::flip_improves_valence(int v, int w) const { return flip_delta(v, 
 
 int Remesher::flip_delta(int v, int w) const {
   if (is_skel(v, w)) return 1000;
-  const std::vector<int> ef = m_.edge_faces(v, w);
+  const auto ef = m_.edge_faces(v, w);
   if (ef.size() != 2) return 1000;
   const int a = m_.opposite(ef[0], v, w), b = m_.opposite(ef[1], v, w);
   if (a == b || m_.edge_face_count(a, b) > 0) return 1000;
@@ -748,7 +769,7 @@ bool Remesher::drive(int b, int w, int side) {
 
 bool Remesher::flip_improves_angle(int v, int w) const {
   if (is_skel(v, w)) return false;
-  const std::vector<int> ef = m_.edge_faces(v, w);
+  const auto ef = m_.edge_faces(v, w);
   if (ef.size() != 2) return false;
   const int a = m_.opposite(ef[0], v, w), b = m_.opposite(ef[1], v, w);
   if (a == b) return false;
@@ -1167,52 +1188,16 @@ void Remesher::regularize() {
 }
 
 std::vector<int> Remesher::intersecting_faces() const {
-  // Uniform grid over face boxes, cell = 2 x mean edge length.
+  // The checker's broad phase (a dense cell grid, pairs tested in parallel) on the live faces;
+  // its face i is the i-th live face of m_.
   std::vector<int> live;
-  double mean = 0;
-  Vec3 lo = Vec3::Constant(1e300), hi = -lo;
-  for (std::size_t f = 0; f < m_.tri.size(); ++f) {
-    if (!m_.face_alive[f]) continue;
-    live.push_back(static_cast<int>(f));
-    const auto& t = m_.tri[f];
-    mean += (m_.pos[t[0]] - m_.pos[t[1]]).norm();
-    for (int c : t) {
-      lo = lo.cwiseMin(m_.pos[c]);
-      hi = hi.cwiseMax(m_.pos[c]);
-    }
-  }
-  if (live.empty()) return {};
-  const double cell = std::max(2 * mean / static_cast<double>(live.size()), 1e-9);
-  auto key = [&](const Vec3& p) {
-    const Eigen::Array3d q = ((p - lo) / cell).array().floor();
-    return std::array<long long, 3>{static_cast<long long>(q[0]), static_cast<long long>(q[1]),
-                                    static_cast<long long>(q[2])};
-  };
-  std::map<std::array<long long, 3>, std::vector<int>> grid;
-  for (int f : live) {
-    const auto& t = m_.tri[f];
-    Vec3 a = m_.pos[t[0]], b = a;
-    for (int c : t) {
-      a = a.cwiseMin(m_.pos[c]);
-      b = b.cwiseMax(m_.pos[c]);
-    }
-    const auto ka = key(a), kb = key(b);
-    for (long long x = ka[0]; x <= kb[0]; ++x)
-      for (long long y = ka[1]; y <= kb[1]; ++y)
-        for (long long z = ka[2]; z <= kb[2]; ++z) grid[{x, y, z}].push_back(f);
-  }
+  for (std::size_t f = 0; f < m_.tri.size(); ++f)
+    if (m_.face_alive[f]) live.push_back(static_cast<int>(f));
   std::vector<int> bad;
-  std::set<std::pair<int, int>> seen;
-  for (const auto& [k, fs] : grid)
-    for (std::size_t i = 0; i < fs.size(); ++i)
-      for (std::size_t j = i + 1; j < fs.size(); ++j) {
-        const int f = std::min(fs[i], fs[j]), g = std::max(fs[i], fs[j]);
-        if (!seen.insert({f, g}).second) continue;
-        if (triangles_intersect(m_.pos, m_.tri[f], m_.tri[g])) {
-          bad.push_back(f);
-          bad.push_back(g);
-        }
-      }
+  for (const auto& [f, g] : intersecting_face_pairs(m_.to_mesh())) {
+    bad.push_back(live[f]);
+    bad.push_back(live[g]);
+  }
   std::sort(bad.begin(), bad.end());
   bad.erase(std::unique(bad.begin(), bad.end()), bad.end());
   return bad;
@@ -1292,7 +1277,7 @@ bool Remesher::raise_star_min_angle(int v) {
 
 bool Remesher::flip_raises_min_angle(int v, int w) {
   if (is_skel(v, w)) return false;
-  const std::vector<int> ef = m_.edge_faces(v, w);
+  const auto ef = m_.edge_faces(v, w);
   if (ef.size() != 2) return false;
   if (flip_delta(v, w) > o_.polish_flip_cost) return false;
   const double before = std::min(face_min_angle(ef[0]), face_min_angle(ef[1]));

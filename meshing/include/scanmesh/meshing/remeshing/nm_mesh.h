@@ -22,6 +22,37 @@ inline std::uint64_t edge_key(int v, int w) {
 inline int edge_key_first(std::uint64_t k) { return static_cast<int>(k >> 32); }
 inline int edge_key_second(std::uint64_t k) { return static_cast<int>(k & 0xffffffffu); }
 
+//! A short list of indices held inline, spilling to the heap past N: what edge_faces and
+//! neighbours return. A remesh asks for them millions of times, and a std::vector each was
+//! ~7 % of its time in malloc / free (perf, lion-head at its own vertex count).
+template <std::size_t N>
+class SmallIndexList {
+ public:
+  void push_back(int x) {
+    if (n_ < N) {
+      inline_[n_] = x;
+    } else {
+      if (n_ == N) heap_.assign(inline_.begin(), inline_.end());
+      heap_.push_back(x);
+    }
+    ++n_;
+  }
+  std::size_t size() const { return n_; }
+  bool empty() const { return n_ == 0; }
+  int operator[](std::size_t i) const { return data()[i]; }
+  const int* begin() const { return data(); }
+  const int* end() const { return data() + n_; }
+  operator std::vector<int>() const { return std::vector<int>(begin(), end()); }
+
+ private:
+  const int* data() const { return n_ <= N ? inline_.data() : heap_.data(); }
+  std::array<int, N> inline_;
+  std::vector<int> heap_;
+  std::size_t n_ = 0;
+};
+using EdgeFaceList = SmallIndexList<6>;   //!< two faces per manifold edge, a few on a seam
+using NeighbourList = SmallIndexList<16>;  //!< a ring
+
 class NmMesh {
  public:
   NmMesh() = default;
@@ -48,10 +79,10 @@ class NmMesh {
   void replace_corner(int f, int from, int to);
 
   //! Radial edge-face list: every live face containing both v and w.
-  std::vector<int> edge_faces(int v, int w) const;
+  EdgeFaceList edge_faces(int v, int w) const;
   int edge_face_count(int v, int w) const;
   //! Distinct neighbours of v (unsorted, deterministic order).
-  std::vector<int> neighbours(int v) const;
+  NeighbourList neighbours(int v) const;
   //! Number of distinct neighbours. Cached per vertex and forgotten by every change of a face
   //! at the vertex (the regularisation asks for the same valences hundreds of thousands of
   //! times between two changes; not thread-safe, like every other use of an NmMesh).
