@@ -119,7 +119,12 @@ class Remesher {
     vs_[v].sq = sq_of(st);
     m_.pos[v] = position_of(st);
   }
-  bool is_skel(int v, int w) const { return sedge_.count(edge_key(v, w)) != 0; }
+  // A skeleton edge joins two skeleton or branch vertices: a free end answers without the
+  // hash look-up (the sweeps ask for every edge, tens of times).
+  bool is_skel(int v, int w) const {
+    if (vs_[v].kind == VertexKind::Free || vs_[w].kind == VertexKind::Free) return false;
+    return sedge_.count(edge_key(v, w)) != 0;
+  }
   double target(int v, int w) const { return scale_ * 0.5 * (vs_[v].sq + vs_[w].sq); }
   bool face_ok(int f) const;
   bool faces_ok(const std::vector<int>& fs) const {
@@ -218,6 +223,8 @@ class Remesher {
   // still the dense input, where it doubled the run time and refused nothing (measured).
   bool embed_check_ = false;
   mutable std::vector<NearFace> near_;   // locally_embedded's scratch
+  mutable std::vector<unsigned> walk_mark_;  // per input face: the walk of project() that met it
+  mutable unsigned walk_stamp_ = 0;
   mutable std::vector<int> face_mark_;   // per face: its place in near_, or -1
   RemeshStats st_;
 };
@@ -271,6 +278,13 @@ void Remesher::build_input() {
 }
 
 void Remesher::project(const Vec3& x, int& face, Vec3& bary) const {
+  // Each input face is evaluated once per walk: a face met again (around a second corner, or
+  // in a later step) cannot beat the best found since, so skipping it changes nothing.
+  if (walk_mark_.size() < m0_.tri.size()) walk_mark_.resize(m0_.tri.size(), 0);
+  if (++walk_stamp_ == 0) {  // wrapped: forget every old mark
+    std::fill(walk_mark_.begin(), walk_mark_.end(), 0);
+    walk_stamp_ = 1;
+  }
   const int patch = sk_.face_patch[face];
   auto eval = [&](int f, Vec3& b) {
     const auto& t = m0_.tri[f];
@@ -279,13 +293,15 @@ void Remesher::project(const Vec3& x, int& face, Vec3& bary) const {
   };
   Vec3 b;
   double best = eval(face, b);
+  walk_mark_[face] = walk_stamp_;
   bary = b;
   for (int step = 0; step < 10000; ++step) {
     int next = -1;
     Vec3 nb;
     for (int c : m0_.tri[face])
       for (int g : m0_.vfaces[c]) {
-        if (g == face || sk_.face_patch[g] != patch) continue;
+        if (walk_mark_[g] == walk_stamp_ || sk_.face_patch[g] != patch) continue;
+        walk_mark_[g] = walk_stamp_;
         const double d = eval(g, b);
         if (d < best * (1 - 1e-12) - 1e-18) {
           best = d;
