@@ -9,6 +9,7 @@
 #include <numbers>
 #include <queue>
 #include <sstream>
+#include <tuple>
 #include <unordered_map>
 
 #include "scanmesh/core/errors.h"
@@ -176,6 +177,23 @@ class Remesher {
     VoronoiCentroid,  // centroid of the vertex's Voronoi cell in its star (Lloyd, §3.6)
   };
   void relax_pass(Relax how);
+  // ---- what a relaxation pass may skip ----
+  // A vertex's relaxed target depends on its position and state and on those of its ring; the
+  // outcome of a move there, on the faces at its ring too. note_change(v) stamps v and its ring
+  // after anything changed at v (a move, a face at v changed, or a face list reordered by an
+  // undone operation). A vertex found settled, or whose move was refused, is skipped by the
+  // next passes until a stamp around it is newer than that finding: it would compute the same
+  // target and get the same answer, so the output is the same as without skipping.
+  enum class Finding : std::uint8_t { None, Settled, Refused };
+  void note_change(int v) {
+    if (changed_at_.size() < m_.pos.size()) changed_at_.resize(m_.pos.size(), 0);
+    ++clock_;
+    changed_at_[v] = clock_;
+    for (int f : m_.vfaces[v])
+      for (int x : m_.tri[f]) changed_at_[x] = clock_;
+  }
+  bool finding_holds(int v) const;
+  void remember(int v, Finding f);
   Vec3 voronoi_centroid(int v, const std::vector<int>& ring) const;
   void skeleton_relax_pass();
   // The two skeleton neighbours a, b of skeleton vertex v and their parameters sa < s(v) < sb
@@ -223,6 +241,19 @@ class Remesher {
   // still the dense input, where it doubled the run time and refused nothing (measured).
   bool embed_check_ = false;
   mutable std::vector<NearFace> near_;   // locally_embedded's scratch
+  std::uint64_t clock_ = 0;                // counts note_change calls
+  std::vector<std::uint64_t> changed_at_;  // per vertex: clock of the last change at or next to it
+  struct Verdict {
+    Finding finding = Finding::None;
+    std::uint64_t at = 0;  // clock when found
+    std::uint64_t settings = 0;
+  };
+  std::vector<Verdict> verdicts_;  // per vertex
+  // Findings hold only under the settings they were made with (mode, scale, bounds): a
+  // relaxation pass with other settings starts a new generation.
+  std::uint64_t settings_generation_ = 0;
+  std::tuple<int, double, double, double, bool> last_settings_{-1, 0, 0, 0, false};
+  mutable std::vector<std::pair<int, int>> ring_scratch_;  // ordered_ring's
   mutable std::vector<unsigned> walk_mark_;  // per input face: the walk of project() that met it
   mutable unsigned walk_stamp_ = 0;
   mutable std::vector<int> face_mark_;   // per face: its place in near_, or -1
@@ -516,7 +547,8 @@ bool Remesher::ordered_ring(int v, std::vector<int>& ring) const {
   const auto& fs = m_.vfaces[v];
   if (fs.size() < 3) return false;
   // next[a] = b for each face (v, a, b) in counter-clockwise order.
-  std::vector<std::pair<int, int>> nx;
+  std::vector<std::pair<int, int>>& nx = ring_scratch_;
+  nx.clear();
   for (int f : fs) {
     const auto& t = m_.tri[f];
     const int i = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
@@ -599,6 +631,8 @@ bool Remesher::collapse(int v, int w) {
     set_state(w, old_w);
     m_.pos[v] = old_pos_v;
     ++st_.rejected_error;
+    note_change(v);  // their face lists are in another order now, w's position rounded anew
+    note_change(w);
     return false;
   }
   // Skeleton bookkeeping.
@@ -615,6 +649,7 @@ bool Remesher::collapse(int v, int w) {
     --seg_edges_[seg];
   }
   m_.remove_vertex(v);
+  note_change(w);
   ++st_.collapses;
   return true;
 }
@@ -656,6 +691,7 @@ int Remesher::split(int v, int w) {
     for (int f : changed) m_.replace_corner(f, u, w);
     m_.remove_vertex(u);
     ++st_.rejected_error;
+    note_change(w);  // its face list is in another order now
     return -1;
   }
   if (skel) {
@@ -665,6 +701,7 @@ int Remesher::split(int v, int w) {
     sedge_[edge_key(u, w)] = seg;
     ++seg_edges_[seg];
   }
+  note_change(u);
   ++st_.splits;
   return u;
 }
@@ -689,8 +726,10 @@ bool Remesher::flip(int v, int w, bool check) {
     m_.replace_corner(f1, b, w);
     m_.replace_corner(f2, a, v);
     ++st_.rejected_error;
+    for (int x : {v, w, a, b}) note_change(x);  // face lists in another order now
     return false;
   }
+  for (int x : {v, w, a, b}) note_change(x);
   ++st_.flips;
   return true;
 }
@@ -707,6 +746,7 @@ bool Remesher::try_state(int v, const VState& ns) {
     ++st_.rejected_error;
     return false;
   }
+  note_change(v);
   ++st_.moves;
   return true;
 }
@@ -820,17 +860,26 @@ void Remesher::split_long() {
 }
 
 void Remesher::collapse_short() {
+  // The first pass looks at every edge. A later pass looks only at the candidates of the pass
+  // before that are still edges and at the edges around a vertex a collapse attempt touched:
+  // every other edge kept its length and target, so the candidates and their order are those
+  // of a full scan (collapse_short was 10 % of a remesh, mostly 20 x rebuilding the edge list).
+  std::vector<std::uint64_t> keys = m_.edges();
+  std::vector<int> touched;
   for (int pass = 0; pass < 20; ++pass) {
-    const auto es = m_.edges();
     std::vector<std::pair<double, std::uint64_t>> cand;
-    for (auto k : es) {
+    for (auto k : keys) {
       const int v = edge_key_first(k), w = edge_key_second(k);
+      if (pass > 0 &&
+          (!m_.vertex_alive[v] || !m_.vertex_alive[w] || m_.edge_face_count(v, w) == 0))
+        continue;
       const double r = (m_.pos[v] - m_.pos[w]).norm() / target(v, w);
       if (r < 0.8) cand.push_back({r, k});
     }
     if (cand.empty()) return;
     std::sort(cand.begin(), cand.end());
     std::size_t done = 0;
+    touched.clear();
     for (const auto& [r, k] : cand) {
       int v = edge_key_first(k), w = edge_key_second(k);
       if (!m_.vertex_alive[v] || !m_.vertex_alive[w] || m_.edge_face_count(v, w) == 0) continue;
@@ -847,9 +896,18 @@ void Remesher::collapse_short() {
       for (int x : m_.neighbours(v))
         if ((m_.pos[x] - mid).norm() > 4.0 / 3.0 * target(x, w)) too_long = true;
       if (too_long) continue;
+      // An undone collapse restores w through its state, not bit for bit its old position.
+      touched.insert(touched.end(), {v, w});
       if (collapse(v, w) || collapse(w, v)) ++done;
     }
     if (done == 0) return;
+    keys.clear();
+    for (const auto& [r, k] : cand) keys.push_back(k);
+    for (int u : touched)
+      if (m_.vertex_alive[u])
+        for (int x : m_.neighbours(u)) keys.push_back(edge_key(u, x));
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
   }
 }
 
@@ -934,11 +992,38 @@ Vec3 Remesher::voronoi_centroid(int v, const std::vector<int>& ring) const {
   return mass > 0 ? Vec3(moment / mass) : p;
 }
 
+bool Remesher::finding_holds(int v) const {
+  if (v >= static_cast<int>(verdicts_.size())) return false;
+  const Verdict& d = verdicts_[v];
+  if (d.finding == Finding::None || d.settings != settings_generation_) return false;
+  auto unchanged = [&](int x) {
+    return x >= static_cast<int>(changed_at_.size()) || changed_at_[x] <= d.at;
+  };
+  if (!unchanged(v)) return false;
+  if (d.finding == Finding::Settled) return true;
+  // A refused move also depends on the faces at the ring's corners (locally_embedded).
+  for (int x : m_.neighbours(v))
+    if (!unchanged(x)) return false;
+  return true;
+}
+
+void Remesher::remember(int v, Finding f) {
+  if (verdicts_.size() < m_.pos.size()) verdicts_.resize(m_.pos.size());
+  verdicts_[v] = {f, clock_, settings_generation_};
+}
+
 void Remesher::relax_pass(Relax how) {
+  const std::tuple<int, double, double, double, bool> settings{
+      static_cast<int>(how), scale_, cos_glatt_, cos_dist_, embed_check_};
+  if (settings != last_settings_) {
+    last_settings_ = settings;
+    ++settings_generation_;
+  }
   std::vector<int> ring;
   const int n = static_cast<int>(m_.pos.size());
   for (int v = 0; v < n; ++v) {
     if (!m_.vertex_alive[v] || vs_[v].kind != VertexKind::Free) continue;
+    if (finding_holds(v)) continue;
     if (!ordered_ring(v, ring)) continue;
     const Vec3 p = m_.pos[v];
     const Vec3 nrm = vertex_normal(v);
@@ -995,8 +1080,11 @@ void Remesher::relax_pass(Relax how) {
     // star bounds, embedding) cost far more than finding that out, and most vertices settle
     // after a few of the ~30 passes.
     const double h = scale_ * vs_[v].sq;
-    if (d.squaredNorm() < kSettledMove * kSettledMove * h * h) continue;
-    move_to(v, p + d);
+    if (d.squaredNorm() < kSettledMove * kSettledMove * h * h) {
+      remember(v, Finding::Settled);
+      continue;
+    }
+    if (!move_to(v, p + d)) remember(v, Finding::Refused);
   }
 }
 
