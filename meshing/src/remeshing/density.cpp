@@ -106,6 +106,10 @@ double patch_kappa_max(const NmMesh& m, const std::vector<Vec3>& normal,
   return graph_kappa_max(q(0), q(1), q(2), q(3), q(4));
 }
 
+// kappa_max of the least-squares quadric over each vertex's 2-ring (of the vertices flagged in
+// `only`, when given; the others get 0).
+std::vector<double> kappa_on_rings(const NmMesh& m, const std::vector<char>* only);
+
 double median_edge_length(const NmMesh& m) {
   std::vector<double> len;
   for (std::size_t f = 0; f < m.tri.size(); f += 7)  // a sample is plenty for a median
@@ -167,18 +171,18 @@ std::vector<double> kappa_at_scale(const NmMesh& m, double radius) {
       gaps = gaps || !m.vfaces[v].empty();
   }
   if (gaps) {
-    // Patches too small or flat-sided to fit (tiny pieces of the input): their 2-ring.
-    const std::vector<double> ring = estimate_kappa_max(m, 0);
+    // Patches too small or flat-sided to fit (tiny pieces of the input): their 2-ring, fitted
+    // for these vertices alone (fitting every vertex was a third of the density's time).
+    std::vector<char> gap(n, 0);
+    for (int v = 0; v < n; ++v) gap[v] = wsum[v] == 0;
+    const std::vector<double> ring = kappa_on_rings(m, &gap);
     for (int v = 0; v < n; ++v)
-      if (wsum[v] == 0) kappa[v] = ring[v];
+      if (gap[v]) kappa[v] = ring[v];
   }
   return kappa;
 }
 
-}  // namespace
-
-std::vector<double> estimate_kappa_max(const NmMesh& m, double radius) {
-  if (radius > 2 * median_edge_length(m)) return kappa_at_scale(m, radius);
+std::vector<double> kappa_on_rings(const NmMesh& m, const std::vector<char>* only) {
   const int n = static_cast<int>(m.pos.size());
   std::vector<double> kappa(n, 0.0);
   std::vector<Eigen::Vector3d> normal(n, Eigen::Vector3d::Zero());
@@ -191,7 +195,7 @@ std::vector<double> estimate_kappa_max(const NmMesh& m, double radius) {
   std::vector<int> ring, mark(n, -1);
 #pragma omp parallel for schedule(dynamic, 256) private(ring) firstprivate(mark)
   for (int v = 0; v < n; ++v) {
-    if (m.vfaces[v].empty() || normal[v].norm() == 0) continue;
+    if ((only && !(*only)[v]) || m.vfaces[v].empty() || normal[v].norm() == 0) continue;
     // 2-ring.
     ring.clear();
     mark[v] = v;
@@ -228,6 +232,13 @@ std::vector<double> estimate_kappa_max(const NmMesh& m, double radius) {
     kappa[v] = graph_kappa_max(q(0), q(1), q(2), q(3), q(4));
   }
   return kappa;
+}
+
+}  // namespace
+
+std::vector<double> estimate_kappa_max(const NmMesh& m, double radius) {
+  if (radius > 2 * median_edge_length(m)) return kappa_at_scale(m, radius);
+  return kappa_on_rings(m, nullptr);
 }
 
 double density_scale(const NmMesh& m, const std::vector<double>& psi, int target_vertices) {
@@ -307,17 +318,23 @@ std::vector<double> compute_density(const NmMesh& m, const DensityOptions& o) {
   };
   clip(psi, o.clip);
   // Low-pass (3.3): mean of the neighbours, the vertex itself excluded, across the skeleton.
+  // The neighbour lists are gathered once, in NmMesh::neighbours' order (the sums' order).
+  std::vector<int> first(n + 1, 0), nbr;
+  if (o.n_filter > 0)
+    for (int v = 0; v < n; ++v) {
+      for (int w : m.neighbours(v)) nbr.push_back(w);
+      first[v + 1] = static_cast<int>(nbr.size());
+    }
   std::vector<double> next(n);
   for (int it = 0; it < o.n_filter; ++it) {
     for (int v = 0; v < n; ++v) {
-      const auto nb = m.neighbours(v);
-      if (nb.empty()) {
+      if (first[v] == first[v + 1]) {
         next[v] = psi[v];
         continue;
       }
       double s = 0;
-      for (int w : nb) s += psi[w];
-      next[v] = s / static_cast<double>(nb.size());
+      for (int k = first[v]; k < first[v + 1]; ++k) s += psi[nbr[k]];
+      next[v] = s / static_cast<double>(first[v + 1] - first[v]);
     }
     psi.swap(next);
   }

@@ -143,17 +143,14 @@ FeatureSkeleton build_feature_skeleton(const NmMesh& m, const FeatureLines& line
   FeatureSkeleton sk;
   const int nv = static_cast<int>(m.pos.size());
   const int nf = static_cast<int>(m.tri.size());
-  // Radial edge-face lists of M0.
-  std::unordered_map<std::uint64_t, std::vector<int>> efaces;
-  efaces.reserve(static_cast<std::size_t>(nf) * 2);
-  for (int f = 0; f < nf; ++f) {
-    if (!m.face_alive[f]) continue;
-    for (int i = 0; i < 3; ++i) efaces[edge_key(m.tri[f][i], m.tri[f][(i + 1) % 3])].push_back(f);
-  }
+  // The edges of M0 with their radial face lists (NmMesh's, in face order: a hash map of
+  // vectors here was a third of the skeleton's time on the demo head).
+  const std::vector<std::uint64_t> edges = m.edges();
   std::set<std::uint64_t> skel;
   const double cos_sharp =
       options.sharp_angle_deg > 0 ? std::cos(options.sharp_angle_deg * std::numbers::pi / 180) : 2;
-  for (const auto& [k, fs] : efaces) {
+  for (const auto k : edges) {
+    const auto fs = m.edge_faces(edge_key_first(k), edge_key_second(k));
     if (fs.size() != 2) {
       skel.insert(k);
       (fs.size() == 1 ? sk.boundary_edges : sk.nonmanifold_edges)++;
@@ -180,7 +177,7 @@ FeatureSkeleton build_feature_skeleton(const NmMesh& m, const FeatureLines& line
                                 " is out of range (mesh has " + std::to_string(nv) + " vertices)");
       if (i + 1 < l.size()) {
         const auto k = edge_key(l[i], std::min(l[i + 1], nv - 1));
-        if (l[i + 1] >= nv || !efaces.count(k))
+        if (l[i + 1] >= nv || m.edge_face_count(l[i], l[i + 1]) == 0)
           throw InvalidInputError("feature line: vertices " + std::to_string(l[i]) + " and " +
                                   std::to_string(l[i + 1]) + " are not joined by an edge");
         if (skel.insert(k).second) ++sk.user_edges;
@@ -198,10 +195,11 @@ FeatureSkeleton build_feature_skeleton(const NmMesh& m, const FeatureLines& line
   sk.kind.assign(nv, VertexKind::Free);
   const double cos_kink = std::cos(options.kink_angle_deg * std::numbers::pi / 180);
   const std::unordered_map<std::uint64_t, int> no_map;
+  const std::set<std::uint64_t> no_set;
   double mean_edge = 0;
-  for (const auto& [k, fs] : efaces)
+  for (const auto k : edges)
     mean_edge += (m.pos[edge_key_first(k)] - m.pos[edge_key_second(k)]).norm();
-  mean_edge /= std::max<double>(1, static_cast<double>(efaces.size()));
+  mean_edge /= std::max<double>(1, static_cast<double>(edges.size()));
   const double reach =
       options.kink_reach_mm > 0 ? options.kink_reach_mm : options.kink_window * mean_edge;
   // End of the walk from v through n along degree-2 skeleton vertices for arc length `reach`.
@@ -220,8 +218,8 @@ FeatureSkeleton build_feature_skeleton(const NmMesh& m, const FeatureLines& line
   for (int v = 0; v < nv; ++v) {
     if (m.vfaces[v].empty()) continue;
     const auto& a = sadj[v];
-    if (a.empty()) {
-      if (count_fans(m, v, no_map, skel) != 1) sk.kind[v] = VertexKind::Branch;
+    if (a.empty()) {  // no skeleton edge at v: none to look up
+      if (count_fans(m, v, no_map, no_set) != 1) sk.kind[v] = VertexKind::Branch;
       continue;
     }
     if (a.size() != 2) {
@@ -305,9 +303,10 @@ FeatureSkeleton build_feature_skeleton(const NmMesh& m, const FeatureLines& line
       const int f = stack.back();
       stack.pop_back();
       for (int i = 0; i < 3; ++i) {
-        const auto k = edge_key(m.tri[f][i], m.tri[f][(i + 1) % 3]);
-        if (skel.count(k)) continue;
-        for (int g : efaces[k])
+        const int a = m.tri[f][i], b = m.tri[f][(i + 1) % 3];
+        // A skeleton edge joins two vertices with skeleton edges (most edges answer here).
+        if (!sadj[a].empty() && !sadj[b].empty() && skel.count(edge_key(a, b))) continue;
+        for (int g : m.edge_faces(a, b))
           if (sk.face_patch[g] < 0) {
             sk.face_patch[g] = id;
             stack.push_back(g);
