@@ -89,7 +89,8 @@ void print_prepare_stats(const remeshing::PrepareOptions& po, const remeshing::P
     say() << "prepare: " << ps.spike_faces_removed << " spike faces and " << ps.pinch_faces_removed
           << " faces at pinch vertices and " << ps.tip_faces_removed
           << " at border tips sharper than " << po.tip_angle_deg << " deg over " << po.tip_reach_mm
-          << " mm removed\n";
+          << " mm removed, " << ps.neck_faces_removed << " at necks and veils thinner than "
+          << 0.25 * po.tip_reach_mm << " mm\n";
   if (po.min_component_faces > 0 || po.min_component_area > 0 || po.max_hole_edges > 0 ||
       po.max_hole_perimeter > 0)
     say() << "prepare: removed " << ps.components_removed << " components (" << ps.faces_removed
@@ -166,6 +167,7 @@ int run_remesh(const RemeshArgs& a) {
         {"spike_faces_removed", ps.spike_faces_removed},
         {"pinch_faces_removed", ps.pinch_faces_removed},
         {"tip_faces_removed", ps.tip_faces_removed},
+        {"neck_faces_removed", ps.neck_faces_removed},
         {"needles_welded", ps.needles_welded},
         {"repeated_faces_removed", ps.repeated_faces_removed}}},
       {"stats",

@@ -6,6 +6,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <numbers>
 #include <set>
@@ -362,6 +363,78 @@ TEST(Prepare, StripsStrandsAndPinches) {
   const MeshCheckReport rep = check_mesh(out, {.self_intersections = false});
   EXPECT_EQ(rep.nonmanifold_vertices, 0u);
   EXPECT_EQ(rep.topology.boundary_loops, 1u);
+}
+
+// A flat nx x ny sheet of unit cells (two triangles each) without the cells `hole` marks.
+Mesh sheet_with_holes(int nx, int ny, const std::function<bool(int, int)>& hole) {
+  Mesh m;
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i) m.positions.push_back({double(i), double(j), 0.0});
+  auto id = [&](int i, int j) { return j * (nx + 1) + i; };
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      if (hole(i, j)) continue;
+      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  return m;
+}
+
+TEST(Prepare, OpensNecksNarrowerThanAQuarterOfTheOutputEdge) {
+  // Left: two holes with a bridge one cell wide between them; right: two holes with a bridge
+  // two cells wide. At an output edge of 8 (necks under 2 are opened) only the left bridge goes.
+  const Mesh in = sheet_with_holes(30, 20, [](int i, int j) {
+    const bool left = i >= 3 && i < 13 && ((j >= 3 && j < 8) || (j >= 9 && j < 14));
+    const bool right = i >= 16 && i < 26 && ((j >= 3 && j < 8) || (j >= 10 && j < 15));
+    return left || right;
+  });
+  ASSERT_EQ(topology_stats(in).boundary_loops, 5u);
+  PrepareStats st;
+  // Tips judged only below 1 deg: the sheet's square corners stay.
+  const Mesh out =
+      prepare_input(in, {.remove_spikes = true, .tip_reach_mm = 8, .tip_angle_deg = 1}, &st);
+  EXPECT_GT(st.neck_faces_removed, 0u);
+  // The bridge's 20 faces, the other faces at its four corner vertices and the two corners of
+  // the sheet cut by one diagonal (two border edges).
+  EXPECT_LE(in.triangles.size() - out.triangles.size(), 20u + 4 * 3 + 2);
+  EXPECT_EQ(topology_stats(out).boundary_loops, 4u);
+  // The left bridge is gone, the two-cell one right of it whole (all 40 faces of its rows).
+  int left_bridge = 0, right_bridge = 0;
+  for (const auto& t : out.triangles) {
+    const Vec3 c = (out.positions[t[0]] + out.positions[t[1]] + out.positions[t[2]]) / 3;
+    left_bridge += c.x() > 3 && c.x() < 13 && c.y() > 8 && c.y() < 9;
+    right_bridge += c.x() > 16 && c.x() < 26 && c.y() > 8 && c.y() < 10;
+  }
+  EXPECT_EQ(left_bridge, 0);
+  EXPECT_EQ(right_bridge, 40);
+  // Without the tip scale nothing is opened.
+  PrepareStats off;
+  prepare_input(in, {.remove_spikes = true}, &off);
+  EXPECT_EQ(off.neck_faces_removed, 0u);
+}
+
+TEST(Prepare, RemovesVeilsAlongTheBorder) {
+  // A 10 x 10 sheet with a veil along its top border: the fan of 11 long faces from (10, 10.2)
+  // and (0, 10.2) over the top row, 0.2 high and up to 10 long, as a scan's grid mesh spans a
+  // depth jump one row high.
+  Mesh in = sheet_with_holes(10, 10, [](int, int) { return false; });
+  const std::size_t sheet_faces = in.triangles.size();
+  const int p0 = static_cast<int>(in.positions.size()), p1 = p0 + 1;
+  in.positions.push_back({0, 10.2, 0});
+  in.positions.push_back({10, 10.2, 0});
+  auto top = [](int i) { return 10 * 11 + i; };  // vertex (i, 10)
+  for (int i = 0; i < 10; ++i) in.triangles.push_back({top(i + 1), top(i), p1});
+  in.triangles.push_back({top(0), p0, p1});
+  ASSERT_EQ(check_mesh(in, {.self_intersections = false}).topology.nonmanifold_edges, 0u);
+  PrepareStats st;
+  const Mesh out =
+      prepare_input(in, {.remove_spikes = true, .tip_reach_mm = 4, .tip_angle_deg = 1}, &st);
+  // The veil (its last face may go as an ear) and the sheet's two corners cut by one diagonal
+  // (faces with two border edges); the rest of the sheet stays.
+  EXPECT_GE(st.neck_faces_removed, 10u);
+  EXPECT_EQ(st.neck_faces_removed + st.spike_faces_removed, 11u + 2u);
+  EXPECT_EQ(out.triangles.size(), sheet_faces - 2);
+  for (const auto& p : out.positions) EXPECT_LE(p.y(), 10.0 + 1e-12);
 }
 
 TEST(Prepare, WeldsNeedlesAndDropsDegenerateFaces) {

@@ -92,6 +92,10 @@ struct PrepareOptions {
   //! boundary vertex, and where the surface's angle between those chords is below tip_angle_deg
   //! (a sharp convex tip at the scale of the output edges, which no good triangle fits) the
   //! vertex's faces are removed, repeatedly. 0: off. `scanmesh remesh` uses the target edge.
+  //! It is also the scale of the thin parts opened (none fits a triangle of the output): at
+  //! necks narrower than tip_reach_mm / 4 between two parts of the border (not within
+  //! tip_reach_mm of each other along it) the faces at the border vertices are removed, and so
+  //! are veils, faces along the border thinner than tip_reach_mm / 4 and four times longer.
   double tip_reach_mm = 0;
   double tip_angle_deg = 120;
 };
@@ -99,6 +103,7 @@ struct PrepareStats {
   std::size_t components_removed = 0, faces_removed = 0, holes_filled = 0, faces_added = 0;
   std::size_t degenerate_removed = 0, needles_welded = 0, caps_flipped = 0, caps_removed = 0;
   std::size_t spike_faces_removed = 0, pinch_faces_removed = 0, tip_faces_removed = 0;
+  std::size_t neck_faces_removed = 0;  //!< at necks and veils (see tip_reach_mm)
   std::size_t repeated_faces_removed = 0;  //!< copies of an earlier face's corners (always)
 };
 //! Returns the cleaned mesh (labels kept; a hole's fan takes the label of its rim faces).
