@@ -93,9 +93,9 @@ TEST(CliRemeshScan, ReadmeCommandOnTheDemoMeshNeedsNoFlags) {
   EXPECT_EQ(q["self_intersections"], 0);
   EXPECT_GE(q["fraction_min_angle_ge_30"].get<double>(), 0.995);
   EXPECT_LE(q["fraction_irregular"].get<double>(), 0.10);
-  // Measured 9.3 deg: two faces with all corners on the border where the cleaned border leaves a
-  // strip narrower than an output edge (docs/remeshing.md, "Weak points"); the goal is 15.
-  EXPECT_GE(q["min_angle_deg"].get<double>(), 8.0);
+  // Measured 17.8 deg (9.3 before the clean-up opened necks and veils: faces with all corners
+  // on the border across a strip narrower than an output edge); issue 27's goal is 15.
+  EXPECT_GE(q["min_angle_deg"].get<double>(), 15.0);
   // --no-prepare: the raw scan's thousands of boundary loops hold more fixed vertices than
   // the target. Invalid input (3), the reason named, nothing written.
   std::tie(code, out) = run("remesh " + (dir / "demo" / "mesh.ply").string() +
