@@ -61,7 +61,54 @@ class Surface {
     out.erase(std::unique(out.begin(), out.end()), out.end());
     return out;
   }
-  void kill(int f) { alive[f] = 0; }
+  void kill(int f) {
+    if (alive[f]) killed.push_back(f);
+    alive[f] = 0;
+  }
+  // The live faces sharing a corner with a face killed at or after killed[since] (each once,
+  // ascending): where a removal can have made a new ear, veil or pinch.
+  std::vector<int> faces_near_killed(std::size_t since) const {
+    std::vector<int> out;
+    for (std::size_t i = since; i < killed.size(); ++i)
+      for (int c : tri[killed[i]])
+        for (int g : vf[c])
+          if (alive[g]) out.push_back(g);
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
+  }
+  // The live faces with a border edge, ascending, brought up to date from the kill log (a
+  // removal changes the edges of its neighbours only). Tips and necks read the border from
+  // these instead of every face, every round.
+  const std::vector<int>& border_faces() {
+    auto has_border_edge = [&](int f) {
+      const auto& t = tri[f];
+      for (int i = 0; i < 3; ++i)
+        if (edge_count(t[i], t[(i + 1) % 3]) == 1) return true;
+      return false;
+    };
+    if (border_faces_seen_ == 0 && border_flag_.empty()) {
+      border_flag_.assign(tri.size(), 0);
+      for (int f = 0; f < static_cast<int>(tri.size()); ++f)
+        border_flag_[f] = alive[f] && has_border_edge(f);
+    } else {
+      for (std::size_t i = border_faces_seen_; i < killed.size(); ++i) border_flag_[killed[i]] = 0;
+      for (int g : faces_near_killed(border_faces_seen_)) border_flag_[g] = has_border_edge(g);
+    }
+    border_faces_seen_ = killed.size();
+    border_list_.clear();
+    for (int f = 0; f < static_cast<int>(tri.size()); ++f)
+      if (border_flag_[f]) border_list_.push_back(f);
+    return border_list_;
+  }
+  std::vector<int> corners_of_killed(std::size_t since) const {
+    std::vector<int> out;
+    for (std::size_t i = since; i < killed.size(); ++i)
+      for (int c : tri[killed[i]]) out.push_back(c);
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
+  }
   double min_angle(int f, int* short_i = nullptr, double* max_angle = nullptr) const {
     const auto& t = tri[f];
     double mn = 10, mx = 0;
@@ -102,6 +149,12 @@ class Surface {
   std::vector<char> alive;
   std::vector<std::vector<int>> vf;
   std::vector<int> label;
+  std::vector<int> killed;  // faces in the order they were removed
+
+ private:
+  std::vector<char> border_flag_;
+  std::vector<int> border_list_;
+  std::size_t border_faces_seen_ = 0;
 };
 
 void repair_needles(Surface& s, double max_angle_rad, PrepareStats& st) {
@@ -194,8 +247,7 @@ void repair_needles(Surface& s, double max_angle_rad, PrepareStats& st) {
 std::size_t remove_tips(Surface& s, double reach, double max_angle) {
   const int nv = static_cast<int>(s.pos.size());
   std::vector<int> next(nv, -1), prev(nv, -1);
-  for (std::size_t f = 0; f < s.tri.size(); ++f) {
-    if (!s.alive[f]) continue;
+  for (const int f : s.border_faces()) {
     const auto& t = s.tri[f];
     for (int i = 0; i < 3; ++i) {
       const int a = t[i], b = t[(i + 1) % 3];
@@ -254,8 +306,7 @@ std::size_t remove_necks(Surface& s, double max_width, double reach) {
   const int nv = static_cast<int>(s.pos.size());
   std::vector<int> next(nv, -1), prev(nv, -1);
   std::vector<std::array<int, 2>> border;
-  for (std::size_t f = 0; f < s.tri.size(); ++f) {
-    if (!s.alive[f]) continue;
+  for (const int f : s.border_faces()) {
     const auto& t = s.tri[f];
     for (int i = 0; i < 3; ++i)
       if (s.edge_count(t[i], t[(i + 1) % 3]) == 1) {
@@ -340,10 +391,8 @@ std::size_t remove_necks(Surface& s, double max_width, double reach) {
 // high with such faces (5.8 x 0.45 mm on the demo head's ear); the output, its edges ~4 x
 // max_height long, can only follow them with needles. Removed face by face, each exposing the
 // next one of the strip. A regular border row (0.45 x 1.1 mm cells) is not thin in this sense.
-std::size_t remove_veils(Surface& s, double max_height) {
-  std::deque<int> queue;
-  for (int f = 0; f < static_cast<int>(s.tri.size()); ++f)
-    if (s.alive[f]) queue.push_back(f);
+std::size_t remove_veils(Surface& s, double max_height, const std::vector<int>& candidates) {
+  std::deque<int> queue(candidates.begin(), candidates.end());
   std::size_t removed = 0;
   while (!queue.empty()) {
     const int f = queue.front();
@@ -371,11 +420,22 @@ std::size_t remove_veils(Surface& s, double max_height) {
 }
 
 void remove_spikes(Surface& s, double tip_reach, double tip_angle, PrepareStats& st) {
-  const int nf = static_cast<int>(s.tri.size());
+  // Repeated until nothing changes. A vertex can become a pinch, and a face an ear or a veil,
+  // only where a face was removed since the last look: after the first round only those are
+  // looked at again (the 40 rounds of the demo head, a handful of faces each, were full passes;
+  // every step is a closure, so the result is the same).
+  std::vector<int> all_faces, all_vertices(s.pos.size());
+  for (int f = 0; f < static_cast<int>(s.tri.size()); ++f)
+    if (s.alive[f]) all_faces.push_back(f);
+  for (int v = 0; v < static_cast<int>(s.pos.size()); ++v) all_vertices[v] = v;
+  std::size_t pinch_seen = 0, ear_seen = 0, veil_seen = 0;
   for (int round = 0; round < 100; ++round) {
     // Pinch vertices: keep the largest fan (faces connected across edges at the vertex).
     std::size_t pinched = 0;
-    for (int v = 0; v < static_cast<int>(s.pos.size()); ++v) {
+    const std::vector<int> pinch_candidates =
+        round == 0 ? all_vertices : s.corners_of_killed(pinch_seen);
+    pinch_seen = s.killed.size();
+    for (int v : pinch_candidates) {
       std::vector<int> fs;
       for (int f : s.vf[v])
         if (s.alive[f]) fs.push_back(f);
@@ -414,9 +474,8 @@ void remove_spikes(Surface& s, double tip_reach, double tip_angle, PrepareStats&
         }
     }
     // Ears: faces with two or three boundary edges, until none is left.
-    std::deque<int> queue;
-    for (int f = 0; f < nf; ++f)
-      if (s.alive[f]) queue.push_back(f);
+    const std::vector<int> ear_candidates = round == 0 ? all_faces : s.faces_near_killed(ear_seen);
+    std::deque<int> queue(ear_candidates.begin(), ear_candidates.end());
     std::size_t eaten = 0;
     while (!queue.empty()) {
       const int f = queue.front();
@@ -432,15 +491,20 @@ void remove_spikes(Surface& s, double tip_reach, double tip_angle, PrepareStats&
         for (int g : s.vf[c])
           if (s.alive[g]) queue.push_back(g);
     }
+    ear_seen = s.killed.size();
     st.spike_faces_removed += eaten;
     const std::size_t tipped = tip_reach > 0 ? remove_tips(s, tip_reach, tip_angle) : 0;
     st.tip_faces_removed += tipped;
     // A triangle across a neck of width w with its base on one side (at least the collapse
     // bound 0.8 L long) has an angle of at most atan(2 w / 0.8 L): under 32 deg for w = L / 4.
-    const std::size_t opened =
-        tip_reach > 0
-            ? remove_necks(s, 0.25 * tip_reach, tip_reach) + remove_veils(s, 0.25 * tip_reach)
-            : 0;
+    std::size_t opened = 0;
+    if (tip_reach > 0) {
+      opened += remove_necks(s, 0.25 * tip_reach, tip_reach);
+      const std::vector<int> veil_candidates =
+          round == 0 ? all_faces : s.faces_near_killed(veil_seen);
+      veil_seen = s.killed.size();
+      opened += remove_veils(s, 0.25 * tip_reach, veil_candidates);
+    }
     st.neck_faces_removed += opened;
     if (pinched == 0 && tipped == 0 && opened == 0) break;
   }
