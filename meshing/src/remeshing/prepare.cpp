@@ -6,6 +6,7 @@
 #include <deque>
 #include <map>
 #include <numbers>
+#include <cstdint>
 #include <unordered_map>
 
 #include "hole_filling.h"
@@ -316,19 +317,33 @@ std::size_t remove_necks(Surface& s, double max_width, double reach) {
       }
   }
   if (border.empty() || !(max_width > 0)) return 0;
-  // Border edges in a hash grid of cell max_width: a vertex meets the edges of its 27 cells.
+  // Border edges in a hash grid: each edge is entered in the cells of points along it, half a
+  // cell apart, so a point within max_width <= cell of the edge has such a point within 1.25
+  // cells, at most two cells away on each axis. The cell grows with the border's mean edge so
+  // that the points number at most 32 per edge (bounded work on edges far longer than L).
+  double length = 0;
+  for (const auto& e : border) length += (s.pos[e[1]] - s.pos[e[0]]).norm();
+  const double cell = std::max(max_width, length / (32.0 * static_cast<double>(border.size())));
   auto cell_of = [&](const Vec3& p) {
-    return std::array<long long, 3>{static_cast<long long>(std::floor(p.x() / max_width)),
-                                    static_cast<long long>(std::floor(p.y() / max_width)),
-                                    static_cast<long long>(std::floor(p.z() / max_width))};
+    return std::array<long long, 3>{static_cast<long long>(std::floor(p.x() / cell)),
+                                    static_cast<long long>(std::floor(p.y() / cell)),
+                                    static_cast<long long>(std::floor(p.z() / cell))};
   };
-  std::map<std::array<long long, 3>, std::vector<int>> grid;
+  // 21 bits per axis: cells 2^21 apart share a key, which only adds candidates.
+  auto key_of = [](long long x, long long y, long long z) {
+    constexpr std::uint64_t mask = (1u << 21) - 1;
+    return ((static_cast<std::uint64_t>(x) & mask) << 42) |
+           ((static_cast<std::uint64_t>(y) & mask) << 21) | (static_cast<std::uint64_t>(z) & mask);
+  };
+  std::unordered_map<std::uint64_t, std::vector<int>> grid;
   for (int e = 0; e < static_cast<int>(border.size()); ++e) {
     const Vec3 &p = s.pos[border[e][0]], &q = s.pos[border[e][1]];
-    const auto lo = cell_of(p.cwiseMin(q)), hi = cell_of(p.cwiseMax(q));
-    for (long long x = lo[0]; x <= hi[0]; ++x)
-      for (long long y = lo[1]; y <= hi[1]; ++y)
-        for (long long z = lo[2]; z <= hi[2]; ++z) grid[{x, y, z}].push_back(e);
+    const int steps = static_cast<int>(std::ceil((q - p).norm() / (0.5 * cell)));
+    for (int k = 0; k <= steps; ++k) {
+      const auto c = cell_of(p + (steps ? double(k) / steps : 0.0) * (q - p));
+      auto& list = grid[key_of(c[0], c[1], c[2])];
+      if (list.empty() || list.back() != e) list.push_back(e);
+    }
   }
   auto along_border = [&](int from, int to) {
     for (const std::vector<int>* step : {&next, &prev}) {
@@ -357,10 +372,10 @@ std::size_t remove_necks(Surface& s, double max_width, double reach) {
     const Vec3& p = s.pos[c];
     const auto k = cell_of(p);
     bool neck = false;
-    for (long long x = k[0] - 1; x <= k[0] + 1 && !neck; ++x)
-      for (long long y = k[1] - 1; y <= k[1] + 1 && !neck; ++y)
-        for (long long z = k[2] - 1; z <= k[2] + 1 && !neck; ++z) {
-          const auto it = grid.find({x, y, z});
+    for (long long x = k[0] - 2; x <= k[0] + 2 && !neck; ++x)
+      for (long long y = k[1] - 2; y <= k[1] + 2 && !neck; ++y)
+        for (long long z = k[2] - 2; z <= k[2] + 2 && !neck; ++z) {
+          const auto it = grid.find(key_of(x, y, z));
           if (it == grid.end()) continue;
           for (int e : it->second) {
             const int a = border[e][0], b = border[e][1];

@@ -413,6 +413,19 @@ TEST(Prepare, OpensNecksNarrowerThanAQuarterOfTheOutputEdge) {
   EXPECT_EQ(off.neck_faces_removed, 0u);
 }
 
+TEST(Prepare, BorderEdgesFarLongerThanTheOutputEdgeCostLittle) {
+  // A 4 x 4 sheet stretched to 4 * 10^5 x 4 cleaned at an output edge of 10^-3: the neck
+  // search's grid must not cover the border edges' boxes at a cell of L / 4 (10^17 cells).
+  // Nothing is thin here; only the two corners cut by one diagonal go (ears).
+  Mesh in = sheet_with_holes(4, 4, [](int, int) { return false; });
+  for (auto& p : in.positions) p.x() *= 1e5;
+  PrepareStats st;
+  const Mesh out =
+      prepare_input(in, {.remove_spikes = true, .tip_reach_mm = 1e-3, .tip_angle_deg = 1}, &st);
+  EXPECT_EQ(out.triangles.size(), in.triangles.size() - 2);
+  EXPECT_EQ(st.neck_faces_removed, 0u);
+}
+
 TEST(Prepare, RemovesVeilsAlongTheBorder) {
   // A 10 x 10 sheet with a veil along its top border: the fan of 11 long faces from (10, 10.2)
   // and (0, 10.2) over the top row, 0.2 high and up to 10 long, as a scan's grid mesh spans a
