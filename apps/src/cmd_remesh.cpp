@@ -37,7 +37,8 @@ struct RemeshArgs {
   double curvature_radius = -1, gradation = 0.3;
   bool uniform = false;
   std::string scheme = "regularize";
-  double theta_dist = 90.0, theta_glatt = 60.0;
+  double theta_dist = remeshing::RemeshOptions{}.theta_dist_deg,
+         theta_glatt = remeshing::RemeshOptions{}.theta_glatt_deg;
   bool no_intersections = false;
   // The scan clean-up: auto (when the input looks like a scan), forced or off; each explicit
   // clean-up option overrides what auto chose.

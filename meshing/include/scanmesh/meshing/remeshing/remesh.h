@@ -137,7 +137,7 @@ struct RemeshOptions {
   SkeletonOptions skeleton;
   FeatureLines features;
   double theta_dist_deg = 90.0;   //!< E_dist (3.4): max angle between corner surface normals
-  double theta_glatt_deg = 60.0;  //!< E_glatt (3.5): max angle face normal vs corner normals
+  double theta_glatt_deg = 75.0;  //!< E_glatt (3.5): max angle face normal vs corner normals
   int adapt_iterations = 6;       //!< split/collapse/flip/relax rounds reaching the density
   int n_area = 3;                 //!< area-based moves per flip sweep (§3.4)
   int n_step = 5;                 //!< outer rounds of area-based remeshing (§3.4)
