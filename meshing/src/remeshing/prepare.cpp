@@ -102,6 +102,46 @@ class Surface {
       if (border_flag_[f]) border_list_.push_back(f);
     return border_list_;
   }
+  // The border as directed edges (as in their face: the surface lies to their left) and, per
+  // vertex, the next and previous border vertex (-1 off the border).
+  struct BorderLinks {
+    std::vector<int> next, prev;
+    std::vector<std::array<int, 2>> edges;
+  };
+  BorderLinks border_links() {
+    BorderLinks b{std::vector<int>(pos.size(), -1), std::vector<int>(pos.size(), -1), {}};
+    for (const int f : border_faces()) {
+      const auto& t = tri[f];
+      for (int i = 0; i < 3; ++i)
+        if (edge_count(t[i], t[(i + 1) % 3]) == 1) {
+          b.next[t[i]] = t[(i + 1) % 3];
+          b.prev[t[(i + 1) % 3]] = t[i];
+          b.edges.push_back({t[i], t[(i + 1) % 3]});
+        }
+    }
+    return b;
+  }
+  // Sum of the live faces' (p1 - p0) x (p2 - p0) at v: the area-weighted normal, not normalised.
+  Vec3 normal_at(int v) const {
+    Vec3 n = Vec3::Zero();
+    for (int g : vf[v])
+      if (alive[g]) {
+        const auto& t = tri[g];
+        n += (pos[t[1]] - pos[t[0]]).cross(pos[t[2]] - pos[t[0]]);
+      }
+    return n;
+  }
+  // Removes every live face at the given vertices; returns how many.
+  std::size_t kill_faces_at(const std::vector<int>& vertices) {
+    std::size_t removed = 0;
+    for (int v : vertices)
+      for (int g : vf[v])
+        if (alive[g]) {
+          kill(g);
+          ++removed;
+        }
+    return removed;
+  }
   std::vector<int> corners_of_killed(std::size_t since) const {
     std::vector<int> out;
     for (std::size_t i = since; i < killed.size(); ++i)
@@ -247,17 +287,8 @@ void repair_needles(Surface& s, double max_angle_rad, PrepareStats& st) {
 // `max_angle` the vertex's faces are removed. Returns the number of faces removed.
 std::size_t remove_tips(Surface& s, double reach, double max_angle) {
   const int nv = static_cast<int>(s.pos.size());
-  std::vector<int> next(nv, -1), prev(nv, -1);
-  for (const int f : s.border_faces()) {
-    const auto& t = s.tri[f];
-    for (int i = 0; i < 3; ++i) {
-      const int a = t[i], b = t[(i + 1) % 3];
-      if (s.edge_count(a, b) == 1) {
-        next[a] = b;
-        prev[b] = a;
-      }
-    }
-  }
+  const Surface::BorderLinks border = s.border_links();
+  const std::vector<int>&next = border.next, &prev = border.prev;
   auto walk = [&](int v, const std::vector<int>& step) {
     int cur = v;
     double arc = 0;
@@ -274,26 +305,14 @@ std::size_t remove_tips(Surface& s, double reach, double max_angle) {
     if (next[v] < 0 || prev[v] < 0) continue;
     const int f = walk(v, next), b = walk(v, prev);
     if (f == v || b == v || f == b) continue;
-    Vec3 n = Vec3::Zero();
-    for (int g : s.vf[v])
-      if (s.alive[g]) {
-        const auto& t = s.tri[g];
-        n += (s.pos[t[1]] - s.pos[t[0]]).cross(s.pos[t[2]] - s.pos[t[0]]);
-      }
+    const Vec3 n = s.normal_at(v);
     const Vec3 db = s.pos[b] - s.pos[v], df = s.pos[f] - s.pos[v];
     const double alpha = std::atan2(db.cross(df).norm(), db.dot(df));
     // Faces lie to the left of the directed border (b -> v -> f): a left turn is convex.
     const bool convex = (s.pos[v] - s.pos[b]).cross(df).dot(n) > 0;
     if (convex && alpha < max_angle) tips.push_back(v);
   }
-  std::size_t removed = 0;
-  for (int v : tips)
-    for (int g : s.vf[v])
-      if (s.alive[g]) {
-        s.kill(g);
-        ++removed;
-      }
-  return removed;
+  return s.kill_faces_at(tips);
 }
 
 // Necks: where the surface between two parts of its border is narrower than `max_width` (the
@@ -305,17 +324,9 @@ std::size_t remove_tips(Surface& s, double reach, double max_angle) {
 // border must lie on the surface's side of the vertex. Returns the number of faces removed.
 std::size_t remove_necks(Surface& s, double max_width, double reach) {
   const int nv = static_cast<int>(s.pos.size());
-  std::vector<int> next(nv, -1), prev(nv, -1);
-  std::vector<std::array<int, 2>> border;
-  for (const int f : s.border_faces()) {
-    const auto& t = s.tri[f];
-    for (int i = 0; i < 3; ++i)
-      if (s.edge_count(t[i], t[(i + 1) % 3]) == 1) {
-        next[t[i]] = t[(i + 1) % 3];
-        prev[t[(i + 1) % 3]] = t[i];
-        border.push_back({t[i], t[(i + 1) % 3]});
-      }
-  }
+  const Surface::BorderLinks links = s.border_links();
+  const std::vector<int>&next = links.next, &prev = links.prev;
+  const std::vector<std::array<int, 2>>& border = links.edges;
   if (border.empty() || !(max_width > 0)) return 0;
   // Border edges in a hash grid: each edge is entered in the cells of points along it, half a
   // cell apart, so a point within max_width <= cell of the edge has such a point within 1.25
@@ -361,14 +372,8 @@ std::size_t remove_necks(Surface& s, double max_width, double reach) {
   std::vector<int> necks;
   for (int c = 0; c < nv; ++c) {
     if (next[c] < 0 || prev[c] < 0) continue;
-    Vec3 normal = Vec3::Zero();
-    for (int g : s.vf[c])
-      if (s.alive[g]) {
-        const auto& t = s.tri[g];
-        normal += (s.pos[t[1]] - s.pos[t[0]]).cross(s.pos[t[2]] - s.pos[t[0]]);
-      }
     // Faces lie left of the directed border: n x t points into the surface.
-    const Vec3 inward = normal.cross(s.pos[next[c]] - s.pos[prev[c]]);
+    const Vec3 inward = s.normal_at(c).cross(s.pos[next[c]] - s.pos[prev[c]]);
     const Vec3& p = s.pos[c];
     const auto k = cell_of(p);
     bool neck = false;
@@ -391,14 +396,7 @@ std::size_t remove_necks(Surface& s, double max_width, double reach) {
         }
     if (neck) necks.push_back(c);
   }
-  std::size_t removed = 0;
-  for (int c : necks)
-    for (int g : s.vf[c])
-      if (s.alive[g]) {
-        s.kill(g);
-        ++removed;
-      }
-  return removed;
+  return s.kill_faces_at(necks);
 }
 
 // Veils: faces along the border that are thinner than `max_height` over their border edge and
