@@ -219,8 +219,14 @@ class Remesher {
   // survivor (1.6 kept the >= 30 deg share of the corpus and the demo head where the split
   // bound 4/3 let the count adjustment fall back to length order more often; measured).
   static constexpr double kLongAfterCollapse = 1.6;
-  bool collapse_makes_long_edge(int v, int w) const;
-  void flips_around(int u);
+  // Whether collapse(v, w) would leave an edge longer than `bound` target lengths at w: among
+  // v's edges alone (collapse_short, bound 4/3) or also w's own (the count adjustment).
+  enum class CollapseEnds { RemovedOnly, Both };
+  bool collapse_makes_long_edge(int v, int w, double bound, CollapseEnds ends) const;
+  // Valence flips of the edges at u's ring vertices; with Spokes::Excluded not the ring's
+  // edges to u itself (regularize's order after its splits).
+  enum class Spokes { Included, Excluded };
+  void flips_around(int u, Spokes spokes = Spokes::Included);
   void regularize();
   // Simple flips, then up to `rounds` sweeps of §3.8 drive edges; the vertex count stays.
   void drive_dipoles(int rounds = 10);
@@ -905,12 +911,7 @@ void Remesher::collapse_short() {
       } else if (vs_[v].kind == VertexKind::Branch) {
         std::swap(v, w);
       }
-      bool too_long = false;
-      const Vec3 mid =
-          (vs_[v].kind == vs_[w].kind) ? Vec3(0.5 * (m_.pos[v] + m_.pos[w])) : m_.pos[w];
-      for (int x : m_.neighbours(v))
-        if ((m_.pos[x] - mid).norm() > 4.0 / 3.0 * target(x, w)) too_long = true;
-      if (too_long) continue;
+      if (collapse_makes_long_edge(v, w, 4.0 / 3.0, CollapseEnds::RemovedOnly)) continue;
       // An undone collapse restores w through its state, not bit for bit its old position.
       touched.insert(touched.end(), {v, w});
       if (collapse(v, w) || collapse(w, v)) ++done;
@@ -1222,7 +1223,8 @@ void Remesher::adjust_count(CountOrder order) {
           continue;
         }
         if (vs_[v].kind != VertexKind::Free) std::swap(v, w);
-        if (by_valence && collapse_makes_long_edge(v, w)) continue;
+        if (by_valence && collapse_makes_long_edge(v, w, kLongAfterCollapse, CollapseEnds::Both))
+          continue;
         if (collapse(v, w)) {
           --need;
           if (by_valence) flips_around(w);
@@ -1257,25 +1259,29 @@ int Remesher::split_valence_change(int v, int w) const {
   return 4 + sq(da + 1) - sq(da) + sq(db + 1) - sq(db);
 }
 
-bool Remesher::collapse_makes_long_edge(int v, int w) const {
+bool Remesher::collapse_makes_long_edge(int v, int w, double bound, CollapseEnds ends) const {
   // Where collapse(v, w) leaves w: the midpoint of two vertices of one kind, else in place.
   const Vec3 mid = vs_[v].kind == vs_[w].kind ? Vec3(0.5 * (m_.pos[v] + m_.pos[w])) : m_.pos[w];
-  for (int end : {v, w})
+  for (int end : {v, w}) {
+    if (end == w && ends == CollapseEnds::RemovedOnly) break;
     for (int x : m_.neighbours(end))
-      if ((m_.pos[x] - mid).norm() > kLongAfterCollapse * target(x, w)) return true;
+      if ((m_.pos[x] - mid).norm() > bound * target(x, w)) return true;
+  }
   return false;
 }
 
-void Remesher::flips_around(int u) {
-  // Valence flips of the edges of u's star and its ring's: a collapse or split leaves its
-  // irregular vertices there (regularize follows its own splits the same way).
+void Remesher::flips_around(int u, Spokes spokes) {
+  // Valence flips of the edges at u's ring vertices: a collapse or split leaves its irregular
+  // vertices there (regularize calls it after its own splits, without the spokes).
   if (!m_.vertex_alive[u]) return;
   for (int f : std::vector<int>(m_.vfaces[u]))
     if (m_.face_alive[f])
       for (int c : m_.tri[f])
         if (c != u)
           for (int x : m_.neighbours(c))
-            if (m_.edge_face_count(c, x) == 2 && flip_improves_valence(c, x)) flip(c, x);
+            if ((spokes == Spokes::Included || x != u) && m_.edge_face_count(c, x) == 2 &&
+                flip_improves_valence(c, x))
+              flip(c, x);
 }
 
 int Remesher::flip_queue() {
@@ -1345,15 +1351,7 @@ void Remesher::regularize() {
       const int u = split(v, w);
       if (u < 0) continue;
       ++changed;
-      for (int f : std::vector<int>(m_.vfaces[u]))
-        if (m_.face_alive[f])
-          for (int c : m_.tri[f])
-            if (c != u) {
-              const auto nb = m_.neighbours(c);
-              for (int x : nb)
-                if (x != u && m_.edge_face_count(c, x) == 2 && flip_improves_valence(c, x))
-                  flip(c, x);
-            }
+      flips_around(u, Spokes::Excluded);
     }
   }
   drive_dipoles();
