@@ -128,6 +128,12 @@ class CellGrid {
       const double gs = std::max(0.0, g - slack);
       return gs * gs;
     };
+    // The x gaps of a small ball (the common case), once instead of once per row.
+    constexpr int kRow = 8;
+    std::array<double, kRow> gx{};
+    const bool short_rows = b[0] - a[0] < kRow;
+    if (short_rows)
+      for (int x = a[0]; x <= b[0]; ++x) gx[x - a[0]] = gap2(0, x);
     for (int z = a[2]; z <= b[2]; ++z) {
       const double gz = gap2(2, z);
       if (gz > r2) continue;
@@ -135,7 +141,7 @@ class CellGrid {
         const double gzy = gz + gap2(1, y);
         if (gzy > r2) continue;
         for (int x = a[0]; x <= b[0]; ++x) {
-          if (gzy + gap2(0, x) > r2) continue;
+          if (gzy + (short_rows ? gx[x - a[0]] : gap2(0, x)) > r2) continue;
           const std::size_t cell = flat(x, y, z);
           for (std::size_t k = start_[cell]; k < start_[cell + 1]; ++k) {
             const int i = order_[k];
@@ -170,9 +176,13 @@ class CellGrid {
                                                   static_cast<double>(out.size())) * 1.15;
       r *= std::clamp(grow, 1.3, 2.0);
     }
+    // The K smallest (distance, index) pairs, sorted: a total order, so the same as a partial
+    // sort, and cheaper than its heap for the few dozen points one query finds.
     const std::size_t keep = std::min(want, out.size());
-    std::partial_sort(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(keep), out.end());
+    if (keep < out.size())
+      std::nth_element(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(keep), out.end());
     out.resize(keep);
+    std::sort(out.begin(), out.end());
   }
 
  private:

@@ -3,6 +3,7 @@
 #include "scanmesh/meshing/fans/fans.h"
 
 #include <omp.h>
+#include <parallel/algorithm>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
@@ -332,6 +333,7 @@ class FanBuilder {
     out.clear();
     bool open = fan_.size() < 3;
     const std::size_t m = fan_.size();
+    out.reserve(m);  // one allocation per fan, not four (a million fans are built in parallel)
     for (std::size_t i = 0; i < m; ++i) {
       const Spoke& a = fan_[i];
       const Spoke& b = fan_[(i + 1) % m];
@@ -501,7 +503,7 @@ class FaceStar {
 class Assembly {
  public:
   Assembly(const std::vector<Vector3d>& pts, double eps_area)
-      : pts_(pts), star_(pts.size()), eps_area_(eps_area) {}
+      : pts_(pts), others_around_(pts.size(), 0), star_(pts.size()), eps_area_(eps_area) {}
 
   const std::vector<std::array<int, 3>>& faces() const { return faces_; }
   const std::vector<std::uint8_t>& alive() const { return alive_; }
@@ -597,10 +599,7 @@ class Assembly {
   }
 
   bool all_consensus_around(const std::array<int, 3>& t) const {
-    for (int v : t)
-      for (const Corner& c : star_[v])
-        if (!consensus_[c.face]) return false;
-    return true;
+    return others_around_[t[0]] == 0 && others_around_[t[1]] == 0 && others_around_[t[2]] == 0;
   }
 
   void add(const std::array<int, 3>& t, bool consensus = false) {
@@ -608,11 +607,17 @@ class Assembly {
     faces_.push_back(t);
     alive_.push_back(1);
     consensus_.push_back(consensus ? 1 : 0);
-    for (int k = 0; k < 3; ++k) star_[t[k]].push_back({f, t[(k + 1) % 3], t[(k + 2) % 3]});
+    for (int k = 0; k < 3; ++k) {
+      star_[t[k]].push_back({f, t[(k + 1) % 3], t[(k + 2) % 3]});
+      if (!consensus) ++others_around_[t[k]];
+    }
   }
   void remove(int f) {
     alive_[f] = 0;
-    for (int v : faces_[f]) star_[v].erase(f);
+    for (int v : faces_[f]) {
+      star_[v].erase(f);
+      if (!consensus_[f]) --others_around_[v];
+    }
   }
 
   bool intersects_star(const std::array<int, 3>& t) const {
@@ -668,9 +673,33 @@ class Assembly {
   std::vector<std::array<int, 3>> faces_;
   std::vector<std::uint8_t> alive_;
   std::vector<std::uint8_t> consensus_;  // all three fans proposed the face
+  // Per vertex: faces around it that are not consensus faces (kept up to date, so the
+  // consensus test reads three counters instead of every face around the corners).
+  std::vector<int> others_around_;
   std::vector<FaceStar> star_;
   double eps_area_;
 };
+
+// The sides of live faces with no face on their other side, as (face, side k: corners k -> k+1),
+// in face order. The scan is read-only and runs in parallel; it visits every face, the
+// collection only the few open ones.
+std::vector<std::pair<int, int>> open_sides(const Assembly& as, int threads) {
+  const auto& faces = as.faces();
+  std::vector<std::uint8_t> open_side(faces.size(), 0);
+  const auto nf = static_cast<std::ptrdiff_t>(faces.size());
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (std::ptrdiff_t f = 0; f < nf; ++f) {
+    if (!as.alive()[f]) continue;
+    for (int k = 0; k < 3; ++k)
+      if (!as.directed_edge_used(faces[f][(k + 1) % 3], faces[f][k])) open_side[f] |= 1 << k;
+  }
+  std::vector<std::pair<int, int>> sides;
+  for (std::size_t f = 0; f < faces.size(); ++f)
+    if (open_side[f])
+      for (int k = 0; k < 3; ++k)
+        if (open_side[f] & (1 << k)) sides.emplace_back(static_cast<int>(f), k);
+  return sides;
+}
 
 // ---------------------------------------------------------------------------------------------
 // Surface growth: the fan triangles are candidates, and the mesh grows from seed triangles
@@ -687,16 +716,19 @@ class SurfaceGrowth {
 
  public:
   SurfaceGrowth(Assembly& as, const std::vector<Vector3d>& pts,
-                const std::vector<std::array<int, 4>>& cands, int n)
+                const std::vector<std::array<int, 4>>& cands, int n, int threads)
       : as_(as), pts_(pts), cands_(cands), used_(cands.size(), 0), start_(n + 1, 0),
-        waiting_(n) {
+        waiting_(n), threads_(threads) {
     for (const auto& c : cands)
       for (int k = 0; k < 3; ++k) ++start_[c[k] + 1];
     for (int v = 0; v < n; ++v) start_[v + 1] += start_[v];
     list_.resize(start_[n]);
     std::vector<int> fill(start_.begin(), start_.end() - 1);
-    for (std::size_t i = 0; i < cands.size(); ++i)
-      for (int k = 0; k < 3; ++k) list_[fill[cands[i][k]]++] = static_cast<int>(i);
+    for (std::size_t i = 0; i < cands.size(); ++i) {
+      const auto& c = cands[i];
+      for (int k = 0; k < 3; ++k)
+        list_[fill[c[k]]++] = {static_cast<int>(i), c[3], {c[(k + 1) % 3], c[(k + 2) % 3]}};
+    }
   }
 
   // Seeds: a candidate whose corners are all still free starts a new front (3 votes first,
@@ -719,11 +751,9 @@ class SurfaceGrowth {
     // edge with the new face ("glue"): allowed now, one at a time, each followed by the normal
     // growth, which zips the two fronts together from the glued vertex.
     std::vector<std::pair<int, int>> open;
-    for (std::size_t f = 0; f < as_.faces().size(); ++f) {
-      if (!as_.alive()[f]) continue;
+    for (const auto& [f, k] : open_sides(as_, threads_)) {
       const auto& t = as_.faces()[f];
-      for (int k = 0; k < 3; ++k)
-        if (!as_.directed_edge_used(t[(k + 1) % 3], t[k])) open.emplace_back(t[k], t[(k + 1) % 3]);
+      open.emplace_back(t[k], t[(k + 1) % 3]);
     }
     for (const auto& [u, v] : open) {
       const std::size_t before = as_.faces().size();
@@ -781,28 +811,31 @@ class SurfaceGrowth {
     out.clear();
     const int x = as_.third_vertex(u, v);
     if (x < 0 || as_.directed_edge_used(v, u)) return;  // not (or no longer) a boundary edge
-    const Vector3d n0 = (pts_[v] - pts_[u]).cross(pts_[x] - pts_[u]).normalized();
     for (int i = start_[u]; i < start_[u + 1]; ++i) {
-      const int ci = list_[i];
-      if (used_[ci]) continue;
-      const auto& c = cands_[ci];
-      if (c[0] != v && c[1] != v && c[2] != v) continue;
-      const int w = c[0] + c[1] + c[2] - u - v;
+      const Incidence& c = list_[i];
+      if (c.other[0] != v && c.other[1] != v) continue;
+      if (used_[c.cand]) continue;
+      const int w = c.other[0] + c.other[1] - v;
       if (w == x) continue;
-      const Vector3d n1 = (pts_[u] - pts_[v]).cross(pts_[w] - pts_[v]).normalized();
-      out.push_back({ci, w, c[3], n0.dot(n1)});
+      out.push_back({c.cand, w, c.votes, 0.0});
     }
+    // The flatness only orders options of equal votes: most edges have one option or none.
+    if (out.size() < 2) return;
+    const Vector3d n0 = (pts_[v] - pts_[u]).cross(pts_[x] - pts_[u]).normalized();
+    for (Option& o : out)
+      o.flatness = n0.dot((pts_[u] - pts_[v]).cross(pts_[o.w] - pts_[v]).normalized());
     std::sort(out.begin(), out.end(), [](const Option& a, const Option& b) {
       return a.votes != b.votes ? a.votes > b.votes : a.flatness > b.flatness;
     });
   }
 
-  // The new face (v, u, w) keeps w a single fan of faces when w is free or shares an edge
-  // with it; otherwise (a "glue") only when allowed and w is on the boundary.
-  bool keeps_vertex_manifold(int u, int v, int w, bool glue) const {
-    if (!has_faces(w)) return true;
-    if (as_.edge_exists(v, w) || as_.edge_exists(w, u)) return true;
-    return glue && as_.on_boundary(w);
+  enum class Join { Free, SharesEdge, Glue, Refused };
+  // How the new face (v, u, w) meets w: it keeps w a single fan of faces when w is free or
+  // shares an edge with it; otherwise (a "glue") only when allowed and w is on the boundary.
+  Join join_at(int u, int v, int w, bool glue) const {
+    if (!has_faces(w)) return Join::Free;
+    if (as_.edge_exists(v, w) || as_.edge_exists(w, u)) return Join::SharesEdge;
+    return glue && as_.on_boundary(w) ? Join::Glue : Join::Refused;
   }
 
   // Tries the candidates of boundary half-edge u -> v with at least `level` votes; re-queues
@@ -814,12 +847,13 @@ class SurfaceGrowth {
         queue_[o.votes].emplace_back(u, v);
         return false;
       }
-      if (!keeps_vertex_manifold(u, v, o.w, glue)) {
+      const Join join = join_at(u, v, o.w, glue);
+      if (join == Join::Refused) {
         // Only a face at w can change that: the edge waits for one.
         waiting_[o.w].emplace_back(u, v);
         continue;
       }
-      const bool glued = has_faces(o.w) && !as_.edge_exists(v, o.w) && !as_.edge_exists(o.w, u);
+      const bool glued = join == Join::Glue;
       if (!as_.try_add({v, u, o.w}, false, o.votes == 3)) continue;
       used_[o.cand] = 1;
       log_.push_back(o.cand);
@@ -846,12 +880,21 @@ class SurfaceGrowth {
   const std::vector<Vector3d>& pts_;
   const std::vector<std::array<int, 4>>& cands_;
   std::vector<std::uint8_t> used_;
-  std::vector<int> start_, list_;  // candidates of each vertex (CSR)
+  // A candidate as seen from one of its corners, with the other two corners in place: the
+  // growth scans a vertex's candidates for every boundary edge, and reading them from the
+  // candidate array was a cache miss each.
+  struct Incidence {
+    int cand, votes;
+    std::array<int, 2> other;
+  };
+  std::vector<int> start_;
+  std::vector<Incidence> list_;  // candidates of each vertex (CSR)
   std::array<std::deque<std::pair<int, int>>, 4> queue_;  // boundary half-edges by votes
   std::vector<Option> options_;
   std::vector<std::vector<std::pair<int, int>>> waiting_;  // edges stalled on a vertex
   std::vector<int> log_;  // candidates in the order they joined
   std::size_t seeds_ = 0, glued_ = 0, unzipped_ = 0;
+  int threads_;
 };
 
 // Faces around v split into edge-connected wedges; all but the largest leave v's star. Only
@@ -1030,19 +1073,9 @@ std::size_t close_holes(Assembly& as, const std::vector<Vector3d>& pts,
                         const std::vector<Vector3d>& normals, int max_edges, double max_edge,
                         int threads) {
   const auto& faces = as.faces();
-  // read-only scan in parallel (flags per face side), collected in face order
-  std::vector<std::uint8_t> open_side(faces.size(), 0);
-  const auto nf = static_cast<std::ptrdiff_t>(faces.size());
-#pragma omp parallel for num_threads(threads) schedule(static)
-  for (std::ptrdiff_t f = 0; f < nf; ++f) {
-    if (!as.alive()[f]) continue;
-    for (int k = 0; k < 3; ++k)
-      if (!as.directed_edge_used(faces[f][(k + 1) % 3], faces[f][k])) open_side[f] |= 1 << k;
-  }
   std::vector<std::pair<int, int>> boundary;
-  for (std::size_t f = 0; f < faces.size(); ++f)
-    for (int k = 0; k < 3; ++k)
-      if (open_side[f] & (1 << k)) boundary.emplace_back(faces[f][k], faces[f][(k + 1) % 3]);
+  for (const auto& [f, k] : open_sides(as, threads))
+    boundary.emplace_back(faces[f][k], faces[f][(k + 1) % 3]);
   std::sort(boundary.begin(), boundary.end());
   std::vector<std::uint8_t> used(boundary.size(), 0);
   auto first_out = [&](int u) {
@@ -1382,46 +1415,51 @@ FanResult build_fans_distinct(const std::vector<Vector3d>& input, const FanOptio
       }
     return false;
   };
-  // Two passes (count, then fill at prefix offsets) keep the order independent of threads.
-  std::vector<std::array<int, 4>> proposals;  // a, b, c, votes
-  {
-    std::vector<std::size_t> offset(static_cast<std::size_t>(n) + 1, 0);
-    for (int pass = 0; pass < 2; ++pass) {
+  // Votes of every closed sector, once (0: another corner emits the triangle), then the
+  // proposals written at prefix offsets straight into their order: 3 votes first, then 2, then
+  // 1, each in point order. Neither depends on the thread count.
+  std::vector<std::size_t> entry_start(static_cast<std::size_t>(n) + 1, 0);
+  for (int c = 0; c < n; ++c) entry_start[c + 1] = entry_start[c] + fans[c].size();
+  std::vector<std::uint8_t> votes(entry_start[n], 0);
+  std::array<std::vector<std::size_t>, 4> offset;  // per vote count: proposals before point c
+  for (int v = 1; v <= 3; ++v) offset[v].assign(static_cast<std::size_t>(n) + 1, 0);
 #pragma omp parallel for num_threads(omp_threads(options)) schedule(dynamic, 512)
-      for (int c = 0; c < n; ++c) {
-        const auto& f = fans[c];
-        const std::size_t m = f.size();
-        std::size_t k = pass == 0 ? 0 : offset[c];
-        for (std::size_t i = 0; i < m; ++i) {
-          if (!f[i].closed_after) continue;
-          const int r1 = f[i].id, r2 = f[(i + 1) % m].id;
-          const bool v1 = has_pair(r1, r2, c), v2 = has_pair(r2, c, r1);
-          int smallest = c;
-          if (v1) smallest = std::min(smallest, r1);
-          if (v2) smallest = std::min(smallest, r2);
-          if (smallest != c) continue;
-          if (pass == 1) proposals[k] = {c, r1, r2, 1 + int(v1) + int(v2)};
-          ++k;
-        }
-        if (pass == 0) offset[c + 1] = k;
-      }
-      if (pass == 0) {
-        for (int c = 0; c < n; ++c) offset[c + 1] += offset[c];
-        proposals.resize(offset[n]);
-      }
+  for (int c = 0; c < n; ++c) {
+    const auto& f = fans[c];
+    const std::size_t m = f.size();
+    for (std::size_t i = 0; i < m; ++i) {
+      if (!f[i].closed_after) continue;
+      const int r1 = f[i].id, r2 = f[(i + 1) % m].id;
+      const bool v1 = has_pair(r1, r2, c), v2 = has_pair(r2, c, r1);
+      int smallest = c;
+      if (v1) smallest = std::min(smallest, r1);
+      if (v2) smallest = std::min(smallest, r2);
+      if (smallest != c) continue;
+      const int v = 1 + int(v1) + int(v2);
+      votes[entry_start[c] + i] = static_cast<std::uint8_t>(v);
+      ++offset[v][c + 1];
+    }
+  }
+  std::array<std::size_t, 5> level_start{};  // proposals with more votes come first
+  for (int v = 3; v >= 1; --v) {
+    for (int c = 0; c < n; ++c) offset[v][c + 1] += offset[v][c];
+    level_start[v] = level_start[v + 1] + offset[v][n];
+  }
+  std::vector<std::array<int, 4>> proposals(level_start[1]);  // a, b, c, votes
+#pragma omp parallel for num_threads(omp_threads(options)) schedule(dynamic, 512)
+  for (int c = 0; c < n; ++c) {
+    const auto& f = fans[c];
+    const std::size_t m = f.size();
+    std::array<std::size_t, 4> k{0, level_start[2] + offset[1][c], level_start[3] + offset[2][c],
+                                 offset[3][c]};
+    for (std::size_t i = 0; i < m; ++i) {
+      const int v = votes[entry_start[c] + i];
+      if (v > 0) proposals[k[v]++] = {c, f[i].id, f[(i + 1) % m].id, v};
     }
   }
   st.proposed_triangles = proposals.size();
-  {  // stable bucket partition: 3 votes, then 2, then 1
-    std::vector<std::array<int, 4>> sorted;
-    sorted.reserve(proposals.size());
-    for (int votes = 3; votes >= 1; --votes)
-      for (const auto& p : proposals)
-        if (p[3] == votes) sorted.push_back(p);
-    proposals.swap(sorted);
-  }
   Assembly as(points, 1e-9);
-  SurfaceGrowth growth(as, points, proposals, n);
+  SurfaceGrowth growth(as, points, proposals, n, omp_threads(options));
   growth.grow();
   st.seeds = growth.seeds();
   st.glued_triangles = growth.glued();
@@ -1476,7 +1514,9 @@ FanResult build_fans_impl(const std::vector<Vector3d>& input, const FanOptions& 
   std::vector<int> order(n);
   std::iota(order.begin(), order.end(), 0);
   const auto key = [&](int i) { return std::tuple(input[i].x(), input[i].y(), input[i].z(), i); };
-  std::sort(order.begin(), order.end(), [&](int a, int b) { return key(a) < key(b); });
+  // A total order (the index breaks ties), so the parallel sort's result is the sequential one.
+  __gnu_parallel::sort(order.begin(), order.end(), [&](int a, int b) { return key(a) < key(b); },
+                       __gnu_parallel::parallel_tag(omp_threads(options)));
   // Sorted by position then index, so each group of copies starts with its smallest index.
   std::vector<int> group_first(n);  // input index -> the first input index at its position
   std::vector<int> first;           // those first indices, in input order after the sort below
