@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <deque>
@@ -519,6 +520,17 @@ class Assembly {
       if (c.next == v || c.prev == v) return true;
     return false;
   }
+  // The bit of the side of face f that starts at its corner u.
+  std::uint8_t side_bit(int f, int u) const {
+    const auto& t = faces_[f];
+    return static_cast<std::uint8_t>(t[0] == u ? 1 : t[1] == u ? 2 : 4);
+  }
+  // The corner at u of the face with the directed edge u -> v, or null.
+  const Corner* corner_with(int u, int v) const {
+    for (const Corner& c : star_[u])
+      if (c.next == v) return &c;
+    return nullptr;
+  }
   // Third corner of the face with the directed edge u -> v, or -1.
   int third_vertex(int u, int v) const {
     for (const Corner& c : star_[u])
@@ -604,9 +616,17 @@ class Assembly {
 
   void add(const std::array<int, 3>& t, bool consensus = false) {
     const int f = static_cast<int>(faces_.size());
+    std::uint8_t open = 0;
+    for (int k = 0; k < 3; ++k) {
+      if (const Corner* across = corner_with(t[(k + 1) % 3], t[k]))
+        open_[across->face] &= static_cast<std::uint8_t>(~side_bit(across->face, t[(k + 1) % 3]));
+      else
+        open |= static_cast<std::uint8_t>(1 << k);
+    }
     faces_.push_back(t);
     alive_.push_back(1);
     consensus_.push_back(consensus ? 1 : 0);
+    open_.push_back(open);
     for (int k = 0; k < 3; ++k) {
       star_[t[k]].push_back({f, t[(k + 1) % 3], t[(k + 2) % 3]});
       if (!consensus) ++others_around_[t[k]];
@@ -614,11 +634,17 @@ class Assembly {
   }
   void remove(int f) {
     alive_[f] = 0;
-    for (int v : faces_[f]) {
+    const auto& t = faces_[f];
+    for (int v : t) {
       star_[v].erase(f);
       if (!consensus_[f]) --others_around_[v];
     }
+    for (int k = 0; k < 3; ++k)
+      if (const Corner* across = corner_with(t[(k + 1) % 3], t[k]))
+        open_[across->face] |= side_bit(across->face, t[(k + 1) % 3]);
   }
+  // Side k (corners k -> k+1) of face f has no face on its other side.
+  bool side_open(int f, int k) const { return open_[f] >> k & 1; }
 
   bool intersects_star(const std::array<int, 3>& t) const {
     for (int v : t)
@@ -673,6 +699,9 @@ class Assembly {
   std::vector<std::array<int, 3>> faces_;
   std::vector<std::uint8_t> alive_;
   std::vector<std::uint8_t> consensus_;  // all three fans proposed the face
+  // Per face: bit k set when its side k has no face across (kept up to date by add and remove,
+  // so boundary queries need no search of the stars).
+  std::vector<std::uint8_t> open_;
   // Per vertex: faces around it that are not consensus faces (kept up to date, so the
   // consensus test reads three counters instead of every face around the corners).
   std::vector<int> others_around_;
@@ -681,23 +710,13 @@ class Assembly {
 };
 
 // The sides of live faces with no face on their other side, as (face, side k: corners k -> k+1),
-// in face order. The scan is read-only and runs in parallel; it visits every face, the
-// collection only the few open ones.
-std::vector<std::pair<int, int>> open_sides(const Assembly& as, int threads) {
-  const auto& faces = as.faces();
-  std::vector<std::uint8_t> open_side(faces.size(), 0);
-  const auto nf = static_cast<std::ptrdiff_t>(faces.size());
-#pragma omp parallel for num_threads(threads) schedule(static)
-  for (std::ptrdiff_t f = 0; f < nf; ++f) {
-    if (!as.alive()[f]) continue;
-    for (int k = 0; k < 3; ++k)
-      if (!as.directed_edge_used(faces[f][(k + 1) % 3], faces[f][k])) open_side[f] |= 1 << k;
-  }
+// in face order.
+std::vector<std::pair<int, int>> open_sides(const Assembly& as) {
   std::vector<std::pair<int, int>> sides;
-  for (std::size_t f = 0; f < faces.size(); ++f)
-    if (open_side[f])
+  for (std::size_t f = 0; f < as.faces().size(); ++f)
+    if (as.alive()[f])
       for (int k = 0; k < 3; ++k)
-        if (open_side[f] & (1 << k)) sides.emplace_back(static_cast<int>(f), k);
+        if (as.side_open(static_cast<int>(f), k)) sides.emplace_back(static_cast<int>(f), k);
   return sides;
 }
 
@@ -716,9 +735,9 @@ class SurfaceGrowth {
 
  public:
   SurfaceGrowth(Assembly& as, const std::vector<Vector3d>& pts,
-                const std::vector<std::array<int, 4>>& cands, int n, int threads)
+                const std::vector<std::array<int, 4>>& cands, int n)
       : as_(as), pts_(pts), cands_(cands), used_(cands.size(), 0), start_(n + 1, 0),
-        waiting_(n), threads_(threads) {
+        waiting_(n) {
     for (const auto& c : cands)
       for (int k = 0; k < 3; ++k) ++start_[c[k] + 1];
     for (int v = 0; v < n; ++v) start_[v + 1] += start_[v];
@@ -744,14 +763,14 @@ class SurfaceGrowth {
         if (!as_.try_add({c[0], c[1], c[2]}, false, votes == 3)) continue;
         used_[i] = 1;
         ++seeds_;
-        push_edges_of({c[0], c[1], c[2]});
+        push_edges_of(newest_face());
         drain(false);
       }
     // Fronts that met stall where a candidate's third corner is on the boundary but shares no
     // edge with the new face ("glue"): allowed now, one at a time, each followed by the normal
     // growth, which zips the two fronts together from the glued vertex.
     std::vector<std::pair<int, int>> open;
-    for (const auto& [f, k] : open_sides(as_, threads_)) {
+    for (const auto& [f, k] : open_sides(as_)) {
       const auto& t = as_.faces()[f];
       open.emplace_back(t[k], t[(k + 1) % 3]);
     }
@@ -858,18 +877,19 @@ class SurfaceGrowth {
       used_[o.cand] = 1;
       log_.push_back(o.cand);
       if (glued) ++glued_;
-      push_edges_of({v, u, o.w});
+      push_edges_of(newest_face());
       return true;
     }
     return false;
   }
 
+  int newest_face() const { return static_cast<int>(as_.faces().size()) - 1; }
+
   // Queues the new face's free edges, and the edges that waited for one of its corners.
-  void push_edges_of(const std::array<int, 3>& t) {
-    for (int k = 0; k < 3; ++k) {
-      const int p = t[k], q = t[(k + 1) % 3];
-      if (!as_.directed_edge_used(q, p)) queue_[3].emplace_back(p, q);
-    }
+  void push_edges_of(int f) {
+    const auto t = as_.faces()[f];
+    for (int k = 0; k < 3; ++k)
+      if (as_.side_open(f, k)) queue_[3].emplace_back(t[k], t[(k + 1) % 3]);
     for (int a : t) {
       for (const auto& e : waiting_[a]) queue_[3].push_back(e);
       waiting_[a].clear();
@@ -894,7 +914,6 @@ class SurfaceGrowth {
   std::vector<std::vector<std::pair<int, int>>> waiting_;  // edges stalled on a vertex
   std::vector<int> log_;  // candidates in the order they joined
   std::size_t seeds_ = 0, glued_ = 0, unzipped_ = 0;
-  int threads_;
 };
 
 // Faces around v split into edge-connected wedges; all but the largest leave v's star. Only
@@ -963,16 +982,22 @@ std::size_t flip_to_delaunay(Assembly& as, const std::vector<Vector3d>& pts, int
     return angle_at(c, a, b) + angle_at(d, b, a) <= kPi + 1e-9;
   };
   // Read-only pass in parallel: only faces with a non-Delaunay edge, and faces next to a flip,
-  // can flip (any other face would pass every test below unchanged).
+  // can flip (any other face would pass every test below unchanged). The test is symmetric in
+  // the two faces, so each interior edge is tested once, from the side a < b, and marks both.
   const std::size_t faces = as.faces().size();
   std::vector<std::uint8_t> suspect(faces, 0);
+  auto mark = [&](std::size_t f) { std::atomic_ref(suspect[f]).store(1, std::memory_order_relaxed); };
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 4096)
   for (std::ptrdiff_t f = 0; f < static_cast<std::ptrdiff_t>(faces); ++f) {
     if (!as.alive()[f]) continue;
     const auto& t = as.faces()[f];
     for (int k = 0; k < 3; ++k) {
       const int a = t[k], b = t[(k + 1) % 3], c = t[(k + 2) % 3];
-      if (!delaunay_across(a, b, c, as.third_vertex(b, a))) suspect[f] = 1;
+      if (a > b) continue;
+      const Corner* across = as.corner_with(b, a);
+      if (!across || delaunay_across(a, b, c, across->prev)) continue;
+      mark(static_cast<std::size_t>(f));
+      mark(static_cast<std::size_t>(across->face));
     }
   }
   std::size_t flips = 0;
@@ -1070,11 +1095,10 @@ std::size_t fill_loop_max_min_angle(Assembly& as, const std::vector<Vector3d>& p
 // `max_edges` edges, by ear clipping in the loop's mean plane, best (largest smallest angle)
 // ear first, through the same checks as the assembly.
 std::size_t close_holes(Assembly& as, const std::vector<Vector3d>& pts,
-                        const std::vector<Vector3d>& normals, int max_edges, double max_edge,
-                        int threads) {
+                        const std::vector<Vector3d>& normals, int max_edges, double max_edge) {
   const auto& faces = as.faces();
   std::vector<std::pair<int, int>> boundary;
-  for (const auto& [f, k] : open_sides(as, threads))
+  for (const auto& [f, k] : open_sides(as))
     boundary.emplace_back(faces[f][k], faces[f][(k + 1) % 3]);
   std::sort(boundary.begin(), boundary.end());
   std::vector<std::uint8_t> used(boundary.size(), 0);
@@ -1251,7 +1275,7 @@ std::size_t insert_unused(Assembly& as, const Context& ctx) {
 // with the oriented normals of their corners on the whole.
 void orient_components_by_normals(std::vector<std::array<int, 3>>& faces,
                                   const std::vector<Vector3d>& pts,
-                                  const std::vector<Vector3d>& normals) {
+                                  const std::vector<Vector3d>& normals, int threads) {
   std::vector<int> parent(pts.size());
   for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = static_cast<int>(i);
   auto find = [&](int i) {
@@ -1260,11 +1284,17 @@ void orient_components_by_normals(std::vector<std::array<int, 3>>& faces,
   };
   for (const auto& t : faces)
     for (int k = 1; k < 3; ++k) parent[find(t[k])] = find(t[0]);
-  std::vector<double> agreement(pts.size(), 0.0);
-  for (const auto& t : faces) {
+  // Each face's vote in parallel, summed in face order (the same sums as one loop).
+  std::vector<double> vote(faces.size());
+  const auto nf = static_cast<std::ptrdiff_t>(faces.size());
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (std::ptrdiff_t f = 0; f < nf; ++f) {
+    const auto& t = faces[f];
     const Vector3d fn = (pts[t[1]] - pts[t[0]]).cross(pts[t[2]] - pts[t[0]]);
-    agreement[find(t[0])] += fn.dot(normals[t[0]] + normals[t[1]] + normals[t[2]]);
+    vote[f] = fn.dot(normals[t[0]] + normals[t[1]] + normals[t[2]]);
   }
+  std::vector<double> agreement(pts.size(), 0.0);
+  for (std::size_t f = 0; f < faces.size(); ++f) agreement[find(faces[f][0])] += vote[f];
   for (auto& t : faces)
     if (agreement[find(t[0])] < 0) std::swap(t[1], t[2]);
 }
@@ -1459,7 +1489,7 @@ FanResult build_fans_distinct(const std::vector<Vector3d>& input, const FanOptio
   }
   st.proposed_triangles = proposals.size();
   Assembly as(points, 1e-9);
-  SurfaceGrowth growth(as, points, proposals, n, omp_threads(options));
+  SurfaceGrowth growth(as, points, proposals, n);
   growth.grow();
   st.seeds = growth.seeds();
   st.glued_triangles = growth.glued();
@@ -1470,8 +1500,7 @@ FanResult build_fans_distinct(const std::vector<Vector3d>& input, const FanOptio
   if (options.max_hole_edges >= 3)
     st.hole_triangles = close_holes(as, points, ctx.normals, options.max_hole_edges,
                                     options.max_edge > 0 ? options.max_edge
-                                                         : std::numeric_limits<double>::infinity(),
-                                    omp_threads(options));
+                                                         : std::numeric_limits<double>::infinity());
   st.inserted_points = insert_unused(as, ctx);
   st.delaunay_flips = flip_to_delaunay(as, points, omp_threads(options));
   st.bowtie_faces_removed = detach_bowties(as, n, omp_threads(options));
@@ -1481,16 +1510,27 @@ FanResult build_fans_distinct(const std::vector<Vector3d>& input, const FanOptio
   std::vector<std::array<int, 3>> faces;
   for (std::size_t f = 0; f < as.faces().size(); ++f)
     if (as.alive()[f]) faces.push_back(as.faces()[f]);
-  orient_components_by_normals(faces, points, ctx.normals);
-  for (const auto& t : faces) mesh.triangles.push_back({perm[t[0]], perm[t[1]], perm[t[2]]});
+  const int threads = omp_threads(options);
+  orient_components_by_normals(faces, points, ctx.normals, threads);
+  const auto nf = static_cast<std::ptrdiff_t>(faces.size());
+  mesh.triangles.resize(faces.size());
+  // Per-face terms in parallel, summed in face order: the same sums as one sequential loop.
+  std::vector<double> signed_volume(faces.size()), doubled_area(faces.size());
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (std::ptrdiff_t f = 0; f < nf; ++f) {
+    const auto& t = faces[f];
+    mesh.triangles[f] = {perm[t[0]], perm[t[1]], perm[t[2]]};
+    const auto& q = mesh.triangles[f];
+    signed_volume[f] = input[q[0]].dot(input[q[1]].cross(input[q[2]]));
+    doubled_area[f] = (input[q[1]] - input[q[0]]).cross(input[q[2]] - input[q[0]]).norm();
+  }
   // Without given normals the oriented estimates may point inwards as a whole: turn
   // everything round if the enclosed volume is negative (meaningful on a closed surface).
   const bool trust_normals = given_normals || options.orient_away_from_axis;
   double volume = 0;
-  for (const auto& t : mesh.triangles) volume += input[t[0]].dot(input[t[1]].cross(input[t[2]]));
+  for (const double v : signed_volume) volume += v;
   double area = 0;
-  for (const auto& t : mesh.triangles)
-    area += (input[t[1]] - input[t[0]]).cross(input[t[2]] - input[t[0]]).norm();
+  for (const double a : doubled_area) area += a;
   const bool flip = !trust_normals && volume < -1e-3 * area * (hi - lo).norm();
   if (flip)
     for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
