@@ -382,14 +382,25 @@ class FanBuilder {
   }
 
   // A cheap necessary condition for 4b/4c to accept q, without its angle (most candidates of
-  // the later rounds fail 4c; atan2 and the cosines were most of the fan stage): q lies in the
-  // circumcircle of some sector (c, a, b) (a point in the triangle does too). Fans with an
-  // open or nearly straight sector, or fewer than two spokes, are not filtered, and a margin
-  // leaves borderline points to the exact test, so the fans are the same as without it.
+  // the later rounds fail 4c; atan2 and the cosines were most of the fan stage). q lies in one
+  // sector (c, a, b) and is tested against that one: in a convex sector it must lie in the
+  // circumcircle of (c, a, b) (a point in the triangle does too); a sector of 180 deg or more
+  // accepts unconditionally, so q must lie in its angular range. The pre-test asks whether q
+  // passes the test of *some* sector, which needs no angle; margins leave borderline points to
+  // the exact test, so the fans are the same as without it. Fans with fewer than two spokes
+  // are not filtered.
   bool surely_rejected(const Vector2d& q) {
     if (!circle_pretest_active()) return false;
-    for (const auto& [centre, r2] : circles_)
-      if ((q - centre).squaredNorm() <= r2 * (1.0 + 1e-6)) return false;
+    for (const SectorTest& t : sector_tests_) {
+      if (t.wide) {
+        // The sector from a counter-clockwise to b spans >= 180 deg (or nearly): it contains
+        // the half-plane left of a and the half-plane right of b, and is their union.
+        const double tol = kWedgeTolerance * q.norm();
+        if (cross2(t.a, q) >= -tol * t.a_len || cross2(q, t.b) >= -tol * t.b_len) return false;
+      } else if ((q - t.a).squaredNorm() <= t.r2 * (1.0 + 1e-6)) {
+        return false;
+      }
+    }
     return true;
   }
   // False when the pre-test cannot reject anything for the current fan.
@@ -399,7 +410,7 @@ class FanBuilder {
   }
   void refresh_circles() {
     circles_fresh_ = true;
-    circles_.clear();
+    sector_tests_.clear();
     const std::size_t m = fan_.size();
     filter_ = m >= 2;
     for (std::size_t i = 0; i < m && filter_; ++i) {
@@ -407,14 +418,16 @@ class FanBuilder {
       const Vector2d& b = fan_[(i + 1) % m].q;
       const double cr = cross2(a, b);  // |a| |b| sin(gap): the sector is convex when > 0
       if (!(cr > 1e-3 * a.norm() * b.norm())) {
-        filter_ = false;
-        break;
+        // 180 deg or more, or nearly straight (the circle would be huge and ill-conditioned):
+        // the angular-range test, a superset of the circle test there.
+        sector_tests_.push_back({true, a, b, a.norm(), b.norm(), 0.0});
+        continue;
       }
       // circle through 0, a and b: 2 o.a = |a|^2, 2 o.b = |b|^2
       const Vector2d o(a.squaredNorm() * b.y() - b.squaredNorm() * a.y(),
                        b.squaredNorm() * a.x() - a.squaredNorm() * b.x());
       const Vector2d centre = o / (2.0 * cr);
-      circles_.emplace_back(centre, centre.squaredNorm());
+      sector_tests_.push_back({false, centre, Vector2d::Zero(), 0.0, 0.0, centre.squaredNorm()});
     }
   }
 
@@ -446,7 +459,16 @@ class FanBuilder {
   const Context& ctx_;
   std::vector<Spoke> fan_;
   std::vector<std::pair<double, int>> cand_;
-  std::vector<std::pair<Vector2d, double>> circles_;  // per sector: centre, squared radius
+  // One per sector: a circle (centre in a, squared radius r2) or a wide sector's two spokes.
+  struct SectorTest {
+    bool wide;
+    Vector2d a, b;
+    double a_len, b_len, r2;
+  };
+  // Relative slack of the angular-range test (a sine): rounding in the rotation into the
+  // tangent plane is far smaller, so no point the exact test accepts is dropped.
+  static constexpr double kWedgeTolerance = 1e-6;
+  std::vector<SectorTest> sector_tests_;
   bool circles_fresh_ = false, filter_ = false;
 };
 
