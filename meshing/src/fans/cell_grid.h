@@ -110,6 +110,9 @@ class CellGrid {
   }
   //! Point indices sorted by cell: iterating in this order keeps neighbouring work together.
   const std::vector<int>& order() const { return order_; }
+  //! Number of cells; the points of cell c are order()[cell_begin(c) .. cell_begin(c + 1)).
+  std::size_t cells() const { return start_.size() - 1; }
+  std::size_t cell_begin(std::size_t c) const { return start_[c]; }
 
   //! Calls f(index, squared distance) for every point with |p - c| <= r.
   template <class F>

@@ -3,7 +3,6 @@
 #include "scanmesh/meshing/fans/fans.h"
 
 #include <omp.h>
-#include <parallel/algorithm>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
@@ -15,6 +14,7 @@
 #include <deque>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <tuple>
@@ -1359,6 +1359,34 @@ std::vector<int> cell_order(const std::vector<Vector3d>& points, int k) {
   return g.order();
 }
 
+// Whether two points share a position. Copies fall into one grid cell, and cells hold a few
+// points, so comparing within cells (in parallel) is far cheaper than sorting the cloud.
+bool has_duplicates(const CellGrid& grid, const std::vector<Vector3d>& points, int threads) {
+  const auto cells = static_cast<std::ptrdiff_t>(grid.cells());
+  const auto& order = grid.order();
+  int found = 0;
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 4096) reduction(| : found)
+  for (std::ptrdiff_t c = 0; c < cells; ++c) {
+    const std::size_t b = grid.cell_begin(c), e = grid.cell_begin(c + 1);
+    if (e - b <= 32) {
+      for (std::size_t i = b; i < e && !found; ++i)
+        for (std::size_t j = i + 1; j < e && !found; ++j)
+          found = points[order[i]] == points[order[j]];
+      continue;
+    }
+    // A crowded cell: sorted by position, copies are neighbours (no quadratic work).
+    std::vector<int> in_cell(order.begin() + b, order.begin() + e);
+    const auto less = [&](int i, int j) {
+      return std::tie(points[i].x(), points[i].y(), points[i].z()) <
+             std::tie(points[j].x(), points[j].y(), points[j].z());
+    };
+    std::sort(in_cell.begin(), in_cell.end(), less);
+    for (std::size_t i = 1; i < in_cell.size() && !found; ++i)
+      found = points[in_cell[i - 1]] == points[in_cell[i]];
+  }
+  return found != 0;
+}
+
 }  // namespace
 
 void FanOptions::validate() const {
@@ -1391,11 +1419,13 @@ std::vector<Vector3d> estimate_fan_normals(const std::vector<Vector3d>& input,
 
 namespace {
 
+// `perm`: the points' cell order (cell_order), computed here when empty.
 FanResult build_fans_distinct(const std::vector<Vector3d>& input, const FanOptions& options,
-                              const std::vector<Eigen::Vector3f>* given_normals) {
+                              const std::vector<Eigen::Vector3f>* given_normals,
+                              std::vector<int> perm = {}) {
   check_input(input, options);
   // Internally the points are in cell order; indices are mapped back at the end.
-  const std::vector<int> perm = cell_order(input, options.k);
+  if (perm.empty()) perm = cell_order(input, options.k);
   std::vector<Vector3d> points(input.size());
   for (std::size_t i = 0; i < perm.size(); ++i) points[i] = input[perm[i]];
   FanResult result;
@@ -1572,13 +1602,22 @@ FanResult build_fans_distinct(const std::vector<Vector3d>& input, const FanOptio
 FanResult build_fans_impl(const std::vector<Vector3d>& input, const FanOptions& options,
                           const std::vector<Eigen::Vector3f>* given_normals) {
   check_input(input, options);
+  // Most clouds have no copies: their cell order is found once and serves the fans too. A
+  // cloud whose copies make its box degenerate (20,000 copies of one point beside a sheet) has
+  // no usable cell size until the copies are gone: it goes the sorting way below.
+  std::optional<CellGrid> grid;
+  try {
+    grid.emplace(input, cell_edge_formula(input, options.k));
+  } catch (const InvalidInputError&) {
+  }
+  if (grid && !has_duplicates(*grid, input, omp_threads(options)))
+    return build_fans_distinct(input, options, given_normals, grid->order());
+  grid.reset();
   const int n = static_cast<int>(input.size());
   std::vector<int> order(n);
   std::iota(order.begin(), order.end(), 0);
   const auto key = [&](int i) { return std::tuple(input[i].x(), input[i].y(), input[i].z(), i); };
-  // A total order (the index breaks ties), so the parallel sort's result is the sequential one.
-  __gnu_parallel::sort(order.begin(), order.end(), [&](int a, int b) { return key(a) < key(b); },
-                       __gnu_parallel::parallel_tag(omp_threads(options)));
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return key(a) < key(b); });
   // Sorted by position then index, so each group of copies starts with its smallest index.
   std::vector<int> group_first(n);  // input index -> the first input index at its position
   std::vector<int> first;           // those first indices, in input order after the sort below
@@ -1587,8 +1626,6 @@ FanResult build_fans_impl(const std::vector<Vector3d>& input, const FanOptions& 
     if (k == 0 || input[i] != input[order[k - 1]]) first.push_back(i);
     group_first[i] = first.back();
   }
-  if (first.size() == static_cast<std::size_t>(n))
-    return build_fans_distinct(input, options, given_normals);
   if (first.size() == 1)
     throw InvalidInputError(
         "build_fans: all points coincide (the fan mesher needs at least 3 "
