@@ -791,15 +791,15 @@ class SurfaceGrowth {
     // Fronts that met stall where a candidate's third corner is on the boundary but shares no
     // edge with the new face ("glue"): allowed now, one at a time, each followed by the normal
     // growth, which zips the two fronts together from the glued vertex.
-    std::vector<std::pair<int, int>> open;
+    std::vector<HalfEdge> open;
     for (const auto& [f, k] : open_sides(as_)) {
       const auto& t = as_.faces()[f];
-      open.emplace_back(t[k], t[(k + 1) % 3]);
+      open.push_back({t[k], t[(k + 1) % 3], f});
     }
-    for (const auto& [u, v] : open) {
+    for (const HalfEdge& e : open) {
       const std::size_t before = as_.faces().size();
       const std::size_t log_before = log_.size();
-      if (!attach(u, v, kGlueVotes, true)) continue;
+      if (!attach(e, kGlueVotes, true)) continue;
       const int w = as_.faces()[before][2];
       drain(false);
       // A glue the growth could not zip from the glued vertex leaves a bow-tie: the glue and
@@ -824,6 +824,10 @@ class SurfaceGrowth {
   }
 
  private:
+  // A boundary half-edge u -> v and the face it was found on.
+  struct HalfEdge {
+    int u, v, face;
+  };
   struct Option {
     int cand, w, votes;
     double flatness;  // cosine between the normals of the existing and the new face
@@ -841,17 +845,27 @@ class SurfaceGrowth {
       int level = 3;
       while (level >= 1 && queue_[level].empty()) --level;
       if (level < 1) return;
-      const auto [u, v] = queue_[level].front();
+      const HalfEdge e = queue_[level].front();
       queue_[level].pop_front();
-      attach(u, v, level, glue);
+      attach(e, level, glue);
     }
   }
 
   // Candidates on the far side of the boundary half-edge u -> v, best first.
-  void options_at(int u, int v, std::vector<Option>& out) const {
+  void options_at(const HalfEdge& e, std::vector<Option>& out) const {
     out.clear();
-    const int x = as_.third_vertex(u, v);
-    if (x < 0 || as_.directed_edge_used(v, u)) return;  // not (or no longer) a boundary edge
+    const int u = e.u, v = e.v;
+    int x = -1;
+    if (as_.alive()[e.face]) {
+      // Faces never change their corners, so a live face still has its side u -> v.
+      const auto& t = as_.faces()[e.face];
+      const int k = t[0] == u ? 0 : t[1] == u ? 1 : 2;
+      if (!as_.side_open(e.face, k)) return;  // no longer a boundary edge
+      x = t[(k + 2) % 3];
+    } else {  // the face was taken back; another may have the side now
+      x = as_.third_vertex(u, v);
+      if (x < 0 || as_.directed_edge_used(v, u)) return;
+    }
     for (int i = start_[u]; i < start_[u + 1]; ++i) {
       const Incidence& c = list_[i];
       if (c.other[0] != v && c.other[1] != v) continue;
@@ -881,17 +895,18 @@ class SurfaceGrowth {
 
   // Tries the candidates of boundary half-edge u -> v with at least `level` votes; re-queues
   // the edge at the next lower level when only weaker candidates remain.
-  bool attach(int u, int v, int level, bool glue) {
-    options_at(u, v, options_);
+  bool attach(const HalfEdge& e, int level, bool glue) {
+    const int u = e.u, v = e.v;
+    options_at(e, options_);
     for (const Option& o : options_) {
       if (o.votes < level) {
-        queue_[o.votes].emplace_back(u, v);
+        queue_[o.votes].push_back(e);
         return false;
       }
       const Join join = join_at(u, v, o.w, glue);
       if (join == Join::Refused) {
         // Only a face at w can change that: the edge waits for one.
-        waiting_[o.w].emplace_back(u, v);
+        waiting_[o.w].push_back(e);
         continue;
       }
       const bool glued = join == Join::Glue;
@@ -911,7 +926,7 @@ class SurfaceGrowth {
   void push_edges_of(int f) {
     const auto t = as_.faces()[f];
     for (int k = 0; k < 3; ++k)
-      if (as_.side_open(f, k)) queue_[3].emplace_back(t[k], t[(k + 1) % 3]);
+      if (as_.side_open(f, k)) queue_[3].push_back({t[k], t[(k + 1) % 3], f});
     for (int a : t) {
       for (const auto& e : waiting_[a]) queue_[3].push_back(e);
       waiting_[a].clear();
@@ -931,9 +946,9 @@ class SurfaceGrowth {
   };
   std::vector<int> start_;
   std::vector<Incidence> list_;  // candidates of each vertex (CSR)
-  std::array<std::deque<std::pair<int, int>>, 4> queue_;  // boundary half-edges by votes
+  std::array<std::deque<HalfEdge>, 4> queue_;  // boundary half-edges by votes
   std::vector<Option> options_;
-  std::vector<std::vector<std::pair<int, int>>> waiting_;  // edges stalled on a vertex
+  std::vector<std::vector<HalfEdge>> waiting_;  // edges stalled on a vertex
   std::vector<int> log_;  // candidates in the order they joined
   std::size_t seeds_ = 0, glued_ = 0, unzipped_ = 0;
 };
