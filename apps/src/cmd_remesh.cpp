@@ -189,6 +189,8 @@ int run_remesh(const RemeshArgs& a) {
         {"skeleton_collapses", s.skeleton_collapses},
         {"intersecting_faces_before_repair", s.intersecting_faces_before_repair},
         {"repair_splits", s.repair_splits},
+        {"input_intersecting_faces", s.input_intersecting_faces},
+        {"input_defect_zone_faces", s.input_defect_zone_faces},
         {"polish_bad_before", s.polish_bad_before},
         {"polish_bad_after", s.polish_bad_after},
         {"polish_moves", s.polish_moves},
@@ -228,6 +230,12 @@ int run_remesh(const RemeshArgs& a) {
   if (q.self_intersections_checked)
     text << ", self-intersections " << q.self_intersections << " (faces cutting another "
          << "before the repair pass: " << s.intersecting_faces_before_repair << ")";
+  if (s.input_intersecting_faces > 0)
+    text << "\n  the input cuts itself: " << s.input_intersecting_faces
+         << " faces cut another input face; within two output edges of them (" 
+         << s.input_defect_zone_faces
+         << " input faces) the output follows the input's crossings and is checked for "
+            "degenerate faces only";
   text << "\nwrote " << a.out << "/{mesh.ply,report.json,quality.png,histograms.png,density.png}\n";
   say() << text.str();
   result() = report;

@@ -89,25 +89,39 @@ INSTANTIATE_TEST_SUITE_P(Meshes, RealCorpusRemesh, ::testing::ValuesIn(kRemeshCa
                            return n;
                          });
 
-// mannequin-devil cuts itself (1,643 intersecting input face pairs). The intersection repair
-// split edges without end there (122,703 instead of 12,977 vertices, 80 s); its splits now stop
-// at 1 % over the target, so the count holds and the run takes seconds.
-TEST(RealCorpusRemesh, MannequinDevilKeepsItsVertexCountAndTopology) {
+// mannequin-devil cuts itself (1,643 intersecting input face pairs, 984 faces). The intersection
+// repair split edges without end there (122,703 instead of 12,977 vertices, 80 s); its splits
+// now stop at 1 % over the target, and leave the input's own crossings alone. Around them (the
+// defect zone, docs/remeshing.md) the operations are checked for degenerate faces only: before
+// that the E_glatt / E_dist bounds refused every operation on the folded sheets and left the
+// input's 0.03 deg needles (98.2 % >= 30 deg, 11.5 % irregular).
+TEST(RealCorpusRemesh, MannequinDevilKeepsItsCountTopologyAndAngles) {
   const Mesh in = read_mesh(kCorpus / "meshes" / "mannequin-devil.off");
   remeshing::RemeshOptions o;
   o.target_vertices = static_cast<int>(in.positions.size());
   const remeshing::RemeshResult r = remeshing::remesh(in, o);
   EXPECT_NEAR(double(r.mesh.positions.size()), double(in.positions.size()),
               0.01 * double(in.positions.size()));
-  const MeshCheckReport rep = check_mesh(r.mesh, {.self_intersections = false});
+  EXPECT_EQ(r.stats.input_intersecting_faces, 984u);
+  EXPECT_GT(r.stats.input_defect_zone_faces, r.stats.input_intersecting_faces);
+  const MeshCheckReport rep = check_mesh(r.mesh);
   EXPECT_TRUE(rep.edge_manifold());
   EXPECT_EQ(rep.topology.boundary_loops, 1u);
   EXPECT_EQ(rep.topology.euler_characteristic, 1);
+  // Measured 2026-12-06: min angle 26.2 deg, 99.96 % >= 30 deg, 7.9 % irregular, Hausdorff
+  // 1.72 input edges, 1,430 intersecting face pairs (CGAL: 17.3 deg, 99.9 %, 2.68 edges, 173).
+  EXPECT_GT(rep.min_angle_deg, 20.0);
+  EXPECT_GE(rep.fraction_min_angle_ge_30, 0.995);
+  EXPECT_LE(remeshing::evaluate_remesh(in, r, false).fraction_irregular, 0.10);
+  const double hausdorff = std::max(remeshing::sampled_distance(r.mesh, in)[0],
+                                    remeshing::sampled_distance(in, r.mesh)[0]);
+  EXPECT_LT(hausdorff / median_edge_length(in), 2.0);
+  // The output follows the input's crossings (it does not add to them).
+  EXPECT_LT(rep.self_intersections, 1643u);
 }
 
 // Known failure, run it with --gtest_also_run_disabled_tests: the output still cuts itself where
-// the input does (1,489 intersecting faces measured; CGAL's output has 173), and its worst
-// triangle is 0.03 deg.
+// the input does (1,344 intersecting face pairs measured; CGAL's output has 173).
 TEST(RealCorpusRemeshKnownFailure, DISABLED_MannequinDevilHasNoIntersections) {
   const Mesh in = read_mesh(kCorpus / "meshes" / "mannequin-devil.off");
   remeshing::RemeshOptions o;

@@ -174,4 +174,20 @@ inline Mesh wavy_sheet(int n, int row, std::vector<int>* line) {
   return b.mesh;
 }
 
+//! A 10 x 10 sheet (n x n cells) with a tuck: the vertices near x = 5 are pushed along x by up
+//! to `push` (past their neighbours: the faces there fold over and cut each other) and lifted a
+//! little (so that the folded faces cross instead of lying in one plane). push 0: a flat sheet.
+inline Mesh tucked_sheet(double push, int n = 40) {
+  MeshBuilder b;
+  b.quad({0, 0, 0}, {10, 0, 0}, {0, 10, 0}, n, 1);
+  Mesh m = b.mesh;
+  for (auto& p : m.positions) {
+    const double w =
+        std::exp(-std::pow((p.x() - 5) / 0.3, 2)) * std::exp(-std::pow((p.y() - 5) / 2.0, 2));
+    p.x() += push * w;
+    p.z() += 0.05 * w * std::sin(7 * p.y());
+  }
+  return m;
+}
+
 }  // namespace scanmesh::test

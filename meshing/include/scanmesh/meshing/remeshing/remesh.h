@@ -162,6 +162,9 @@ struct RemeshOptions {
   //! E_glatt / E_dist refuse every move, a needle is the worse error. 0: off.
   double polish_floor_deg = 30.0;
   double polish_floor_glatt_deg = 85.0, polish_floor_dist_deg = 120.0;
+  //! Faces still under this min angle (deg) after that get polish rounds without the normal
+  //! bounds (a needle is worse than any normal error; the intersection test stays). 0: off.
+  double polish_needle_deg = 15.0;
   //! Called with (phase name, fraction done in [0, 1]); may be empty.
   std::function<void(const std::string&, double)> progress;
 };
@@ -181,6 +184,10 @@ struct RemeshStats {
   std::size_t polish_bad_before = 0, polish_bad_after = 0, polish_moves = 0, polish_flips = 0;
   //! Edges split by the repair pass to make faces of two nearby sheets follow the input.
   std::size_t repair_splits = 0;
+  //! Input faces that cut another input face, and the input faces within two output edges of
+  //! them (the defect zone: operations there are checked for degenerate faces only, and the
+  //! repair pass leaves the output's crossings there alone). 0 for an input that is a surface.
+  std::size_t input_intersecting_faces = 0, input_defect_zone_faces = 0;
   double seconds_setup = 0, seconds_adapt = 0, seconds_count = 0, seconds_regularize = 0,
          seconds_smooth = 0, seconds_total = 0;
 };
