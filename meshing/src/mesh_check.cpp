@@ -339,9 +339,7 @@ MeshCheckReport check_mesh(const Mesh& mesh, const MeshCheckOptions& options) {
     r.fraction_min_angle_ge_30 = static_cast<double>(good) / static_cast<double>(F.size());
   }
   if (options.self_intersections) {
-    // Work bound: ~100 candidate pairs per face is far above any real mesh (about 10); 2e7
-    // pairs take about a second.
-    const std::size_t budget = std::max<std::size_t>(20'000'000, 100 * F.size());
+    const std::size_t budget = default_candidate_pair_budget(F.size());
     bool complete = true;
     r.self_intersections = intersecting_face_pairs(mesh, nullptr, nullptr, budget, &complete).size();
     r.self_intersections_checked = complete;

@@ -532,11 +532,7 @@ class Assembly {
   const std::vector<std::uint8_t>& alive() const { return alive_; }
   const std::vector<FaceStar>& star() const { return star_; }
 
-  bool directed_edge_used(int u, int v) const {
-    for (const Corner& c : star_[u])
-      if (c.next == v) return true;
-    return false;
-  }
+  bool directed_edge_used(int u, int v) const { return corner_with(u, v) != nullptr; }
   bool edge_exists(int u, int v) const {
     for (const Corner& c : star_[u])
       if (c.next == v || c.prev == v) return true;
@@ -555,15 +551,13 @@ class Assembly {
   }
   // Third corner of the face with the directed edge u -> v, or -1.
   int third_vertex(int u, int v) const {
-    for (const Corner& c : star_[u])
-      if (c.next == v) return c.prev;
-    return -1;
+    const Corner* c = corner_with(u, v);
+    return c ? c->prev : -1;
   }
   // The face with the directed edge u -> v, or -1.
   int face_with(int u, int v) const {
-    for (const Corner& c : star_[u])
-      if (c.next == v) return c.face;
-    return -1;
+    const Corner* c = corner_with(u, v);
+    return c ? c->face : -1;
   }
   // Calls visit(p, q) for every boundary half-edge p -> q (no face has q -> p) at vertex a,
   // face by face in star order (the edge leaving a before the edge entering it).

@@ -399,19 +399,34 @@ std::size_t remove_necks(Surface& s, double max_width, double reach) {
   return s.kill_faces_at(necks);
 }
 
+// Removes every live face among `candidates` for which `peel(f)` holds, and after each removal
+// looks again at the live faces around its corners (a removal exposes the next face of a strip
+// or an ear). First in, first out; returns the number removed.
+template <class Peel>
+std::size_t peel_faces(Surface& s, const std::vector<int>& candidates, Peel&& peel) {
+  std::deque<int> queue(candidates.begin(), candidates.end());
+  std::size_t removed = 0;
+  while (!queue.empty()) {
+    const int f = queue.front();
+    queue.pop_front();
+    if (!s.alive[f] || !peel(f)) continue;
+    s.kill(f);
+    ++removed;
+    for (int c : s.tri[f])
+      for (int g : s.vf[c])
+        if (s.alive[g]) queue.push_back(g);
+  }
+  return removed;
+}
+
 // Veils: faces along the border that are thinner than `max_height` over their border edge and
 // at least four times longer than thick. A range scan's grid mesh spans a depth jump one row
 // high with such faces (5.8 x 0.45 mm on the demo head's ear); the output, its edges ~4 x
 // max_height long, can only follow them with needles. Removed face by face, each exposing the
 // next one of the strip. A regular border row (0.45 x 1.1 mm cells) is not thin in this sense.
 std::size_t remove_veils(Surface& s, double max_height, const std::vector<int>& candidates) {
-  std::deque<int> queue(candidates.begin(), candidates.end());
-  std::size_t removed = 0;
-  while (!queue.empty()) {
-    const int f = queue.front();
-    queue.pop_front();
-    if (!s.alive[f]) continue;
-    const auto t = s.tri[f];
+  return peel_faces(s, candidates, [&](int f) {
+    const auto& t = s.tri[f];
     bool thin = false;
     for (int i = 0; i < 3 && !thin; ++i) {
       const int a = t[i], b = t[(i + 1) % 3], c = t[(i + 2) % 3];
@@ -422,14 +437,8 @@ std::size_t remove_veils(Surface& s, double max_height, const std::vector<int>& 
       const double height = ab.cross(s.pos[c] - s.pos[a]).norm() / length;
       thin = height < max_height && 4 * height < length;
     }
-    if (!thin) continue;
-    s.kill(f);
-    ++removed;
-    for (int c : t)
-      for (int g : s.vf[c])
-        if (s.alive[g]) queue.push_back(g);
-  }
-  return removed;
+    return thin;
+  });
 }
 
 void remove_spikes(Surface& s, double tip_reach, double tip_angle, PrepareStats& st) {
@@ -488,22 +497,12 @@ void remove_spikes(Surface& s, double tip_reach, double tip_angle, PrepareStats&
     }
     // Ears: faces with two or three boundary edges, until none is left.
     const std::vector<int> ear_candidates = round == 0 ? all_faces : s.faces_near_killed(ear_seen);
-    std::deque<int> queue(ear_candidates.begin(), ear_candidates.end());
-    std::size_t eaten = 0;
-    while (!queue.empty()) {
-      const int f = queue.front();
-      queue.pop_front();
-      if (!s.alive[f]) continue;
+    const std::size_t eaten = peel_faces(s, ear_candidates, [&](int f) {
       const auto& t = s.tri[f];
       int boundary = 0;
       for (int i = 0; i < 3; ++i) boundary += s.edge_count(t[i], t[(i + 1) % 3]) == 1;
-      if (boundary < 2) continue;
-      s.kill(f);
-      ++eaten;
-      for (int c : t)
-        for (int g : s.vf[c])
-          if (s.alive[g]) queue.push_back(g);
-    }
+      return boundary >= 2;
+    });
     ear_seen = s.killed.size();
     st.spike_faces_removed += eaten;
     const std::size_t tipped = tip_reach > 0 ? remove_tips(s, tip_reach, tip_angle) : 0;

@@ -1672,9 +1672,9 @@ RemeshResult Remesher::run() {
   // are built (the broad phase over a 300,000-face scan takes ~0.15 s).
   // The checker's work bound: faces crowding one place (a hostile input) leave no zone.
   auto crossing = std::async(std::launch::async, [this] {
-    const std::size_t budget = std::max<std::size_t>(20'000'000, 100 * input_.triangles.size());
     bool complete = true;
-    auto pairs = intersecting_face_pairs(input_, nullptr, nullptr, budget, &complete);
+    auto pairs = intersecting_face_pairs(
+        input_, nullptr, nullptr, default_candidate_pair_budget(input_.triangles.size()), &complete);
     return complete ? pairs : std::vector<std::array<int, 2>>{};
   });
   build_input();
