@@ -13,6 +13,7 @@
 #include <sstream>
 #include <tuple>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "scanmesh/core/errors.h"
 #include "scanmesh/meshing/mesh_check.h"
@@ -77,6 +78,7 @@ struct VState {
   int iface = -1;      // free: input face of the projection
   Vec3 bary{1, 0, 0};  // free: barycentric coordinates in iface
   double sq = 1;       // sqrt(Psi) at the vertex
+  Vec3 normal = Vec3::Zero();  // free: the input's normal there (face_ok asks ~20 times a move)
 };
 
 class Remesher {
@@ -116,6 +118,11 @@ class Remesher {
   int input_face_on_patch_at_edge(int a, int b, int patch) const;
   int input_face_on_patch_at_vertex(int u, int patch) const;
   Vec3 corner_normal(int v, int patch) const;
+  Vec3 free_normal(const VState& st) const {  // zero for other kinds
+    if (st.kind != VertexKind::Free || st.iface < 0) return Vec3::Zero();
+    const auto& c = cn_[st.iface];
+    return (st.bary[0] * c[0] + st.bary[1] * c[1] + st.bary[2] * c[2]).normalized();
+  }
   double sq_of(const VState& st) const;
   Vec3 position_of(const VState& st) const;
   // Parameter of vertex x on segment seg, near `near_s` (a branch vertex may sit at either end).
@@ -133,11 +140,13 @@ class Remesher {
     const int v = m_.add_vertex(position_of(st));
     vs_.push_back(st);
     vs_.back().sq = sq_of(st);
+    vs_.back().normal = free_normal(st);
     return v;
   }
   void set_state(int v, const VState& st) {
     vs_[v] = st;
     vs_[v].sq = sq_of(st);
+    vs_[v].normal = free_normal(st);
     m_.pos[v] = position_of(st);
   }
   // A skeleton edge joins two skeleton or branch vertices: a free end answers without the
@@ -178,7 +187,8 @@ class Remesher {
   bool flip(int v, int w, bool check = true);
   int flip_delta(int v, int w) const;  // change of R (3.22) by flipping, 1000 if impossible
   bool drive(int b, int w, int side);
-  std::array<int, 2> last_flip_{-1, -1};
+  std::array<int, 2> last_flip_{-1, -1};        // the edge the last flip made
+  std::array<int, 2> last_flip_faces_{-1, -1};  // and its two faces
   bool try_state(int v, const VState& ns);  // move v to ns if its star stays valid
   bool move_to(int v, const Vec3& x);       // free vertex, 3D target (projected)
   bool move_skeleton(int v, double s_new);  // skeleton vertex, 1D
@@ -190,6 +200,19 @@ class Remesher {
   void collapse_short();
   int flip_pass(bool delaunay);
   int flip_queue();  // simple-edge flips, worst valence deviation first
+  // What the last finished flip sweep of a kind left: every edge's answer as of clock `at`
+  // under these bounds (not valid: the sweep stopped at its pass limit).
+  struct FlipSweepMemory {
+    bool valid = false;
+    std::uint64_t at = 0;
+    double cos_glatt = 0, cos_dist = 0;
+  };
+  FlipSweepMemory valence_sweep_, angle_sweep_;
+  // Edges of the faces at vertices stamped after `at`, sorted.
+  std::vector<std::uint64_t> edges_near_changes_since(std::uint64_t at) const;
+  template <class Consider>
+  int incremental_first_sweep(const std::vector<std::uint64_t>& dirty, Consider& consider,
+                              std::vector<int>& touched);
   int simple_flips() { return o_.regularize_queue ? flip_queue() : flip_pass(false); }
   // Where a free vertex is moved by one relaxation pass.
   enum class Relax {
@@ -205,13 +228,28 @@ class Remesher {
   // undone operation). A vertex found settled, or whose move was refused, is skipped by the
   // next passes until a stamp around it is newer than that finding: it would compute the same
   // target and get the same answer, so the output is the same as without skipping.
+  //
+  // The flip sweeps ask less: only whether anything but the order of a face list changed
+  // (Change::Altered, stamped into altered_at_ as well). An undone flip or split leaves the
+  // same faces and positions (Change::Reordered); an undone collapse may round a position anew
+  // and counts as altered.
   enum class Finding : std::uint8_t { None, Settled, Refused };
-  void note_change(int v) {
-    if (changed_at_.size() < m_.pos.size()) changed_at_.resize(m_.pos.size(), 0);
+  enum class Change { Altered, Reordered };
+  void note_change(int v, Change change = Change::Altered) {
+    if (changed_at_.size() < m_.pos.size()) {
+      changed_at_.resize(m_.pos.size(), 0);
+      altered_at_.resize(m_.pos.size(), 0);
+    }
     ++clock_;
-    changed_at_[v] = clock_;
+    auto stamp = [&](int x) {
+      changed_at_[x] = clock_;
+      if (change != Change::Altered) return;
+      if (altered_journal_) altered_journal_->push_back({x, altered_at_[x]});
+      altered_at_[x] = clock_;
+    };
+    stamp(v);
     for (int f : m_.vfaces[v])
-      for (int x : m_.tri[f]) changed_at_[x] = clock_;
+      for (int x : m_.tri[f]) stamp(x);
   }
   bool finding_holds(int v) const;
   void remember(int v, Finding f);
@@ -286,6 +324,10 @@ class Remesher {
   mutable std::vector<NearFace> near_;   // locally_embedded's scratch
   std::uint64_t clock_ = 0;                // counts note_change calls
   std::vector<std::uint64_t> changed_at_;  // per vertex: clock of the last change at or next to it
+  std::vector<std::uint64_t> altered_at_;  // the same for Change::Altered alone
+  // While a drive is tried: the altered_at_ stamps it overwrote, to put back when it is undone
+  // (its flips and their undoing leave the mesh as it was).
+  std::vector<std::pair<int, std::uint64_t>>* altered_journal_ = nullptr;
   struct Verdict {
     Finding finding = Finding::None;
     std::uint64_t at = 0;  // clock when found
@@ -448,10 +490,7 @@ Vec3 Remesher::corner_normal(int v, int patch) const {
     const auto& t = m0_.tri[f];
     return cn_[f][t[0] == u ? 0 : (t[1] == u ? 1 : 2)];
   };
-  if (st.kind == VertexKind::Free) {
-    const auto& c = cn_[st.iface];
-    return (st.bary[0] * c[0] + st.bary[1] * c[1] + st.bary[2] * c[2]).normalized();
-  }
+  if (st.kind == VertexKind::Free) return st.normal;
   if (st.kind == VertexKind::Branch) {
     const int f = input_face_on_patch_at_vertex(st.inp, patch);
     return f >= 0 ? at(f, st.inp) : Vec3::Zero();
@@ -776,7 +815,7 @@ int Remesher::split(int v, int w) {
     for (int f : changed) m_.replace_corner(f, u, w);
     m_.remove_vertex(u);
     ++st_.rejected_error;
-    note_change(w);  // its face list is in another order now
+    note_change(w, Change::Reordered);  // its face list is in another order now
     return -1;
   }
   if (skel) {
@@ -807,11 +846,12 @@ bool Remesher::flip(int v, int w, bool check) {
   m_.replace_corner(f1, w, b);  // (v, b, a)
   m_.replace_corner(f2, v, a);  // (w, a, b)
   last_flip_ = {a, b};
+  last_flip_faces_ = {f1, f2};
   if (check && (!face_ok(f1) || !face_ok(f2))) {
     m_.replace_corner(f1, b, w);
     m_.replace_corner(f2, a, v);
     ++st_.rejected_error;
-    for (int x : {v, w, a, b}) note_change(x);  // face lists in another order now
+    for (int x : {v, w, a, b}) note_change(x, Change::Reordered);  // face lists reordered
     return false;
   }
   for (int x : {v, w, a, b}) note_change(x);
@@ -873,6 +913,12 @@ bool Remesher::drive(int b, int w, int side) {
   // reappears on the far side of that quad. Moved at most drive_limit steps; kept only if R
   // dropped on the way (a simple edge appeared and was flipped), otherwise undone.
   std::vector<std::array<int, 2>> log;
+  std::vector<std::pair<int, std::uint64_t>> journal;
+  altered_journal_ = &journal;
+  struct StopJournal {
+    std::vector<std::pair<int, std::uint64_t>>*& journal;
+    ~StopJournal() { journal = nullptr; }
+  } stop{altered_journal_};
   int total = 0;
   for (int step = 0; step < o_.drive_limit; ++step) {
     const auto ef = m_.edge_faces(b, w);
@@ -903,8 +949,19 @@ bool Remesher::drive(int b, int w, int side) {
     w = y;
   }
   if (total < 0) return true;
-  for (auto it = log.rbegin(); it != log.rend(); ++it) flip((*it)[0], (*it)[1], false);
+  // Undone by flipping the new edges back: the same triangles, though the two faces of each
+  // flip may hold each other's; the same mesh as long as both have one patch and label (a
+  // flipped edge is no skeleton edge, so they do; checked all the same).
+  bool restored = true;
+  for (auto it = log.rbegin(); it != log.rend(); ++it) {
+    restored &= flip((*it)[0], (*it)[1], false);
+    const auto [f1, f2] = last_flip_faces_;
+    restored &= patch_[f1] == patch_[f2] && m_.label[f1] == m_.label[f2];
+  }
   st_.flips -= 2 * log.size();
+  // The mesh is as it was: the flip sweeps need not look here again for this drive.
+  if (restored)
+    for (auto it = journal.rbegin(); it != journal.rend(); ++it) altered_at_[it->first] = it->second;
   return false;
 }
 
@@ -991,27 +1048,68 @@ void Remesher::collapse_short() {
   }
 }
 
+std::vector<std::uint64_t> Remesher::edges_near_changes_since(std::uint64_t at) const {
+  const int n = static_cast<int>(m_.pos.size());
+  auto stamped = [&](int u) {
+    return m_.vertex_alive[u] &&
+           (u >= static_cast<int>(altered_at_.size()) || altered_at_[u] > at);
+  };
+  std::vector<int> dirty;
+  for (int u = 0; u < n; ++u)
+    if (stamped(u)) dirty.push_back(u);
+  // Past a quarter of the vertices, gathering and sorting the face edges costs more than the
+  // vertex-by-vertex list of all edges.
+  if (4 * dirty.size() > static_cast<std::size_t>(m_.vertex_count())) return m_.edges();
+  std::vector<std::uint64_t> keys;
+  for (int u : dirty)
+    for (int f : m_.vfaces[u]) {
+      const auto& t = m_.tri[f];
+      for (int i = 0; i < 3; ++i) keys.push_back(edge_key(t[i], t[(i + 1) % 3]));
+    }
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  return keys;
+}
+
 int Remesher::flip_pass(bool delaunay) {
   // Sweeps until no flip is wanted. A flip changes only the valences and angles of its quad,
   // so after the first sweep only the edges of the faces around the flipped quads' corners
   // can have become flippable: later sweeps visit those alone (in key order, like the first).
+  //
+  // The first sweep, too, skips what the last finished sweep of the same kind left unchanged:
+  // an edge's answer depends only on its quad (positions, states, valences, the bounds), and
+  // note_change stamps every vertex whose quad changed. It visits the edges of the faces at
+  // stamped vertices and, as the full sweep would, an edge that a flip makes dirty further on
+  // in key order (unless that flip created it: the full sweep's list was made before). The
+  // flips are the same, in the same order; only the look at ~all edges is saved (the valence
+  // sweeps after each drive round were ~10 % of a remesh at the input's own count).
+  FlipSweepMemory& memory = delaunay ? angle_sweep_ : valence_sweep_;
+  const bool incremental = memory.valid && memory.cos_glatt == cos_glatt_ &&
+                           memory.cos_dist == cos_dist_;
   int total = 0;
-  std::vector<std::uint64_t> keys = m_.edges();
+  std::vector<std::uint64_t> keys = incremental ? edges_near_changes_since(memory.at) : m_.edges();
   std::vector<int> touched;
-  for (int pass = 0; pass < 10 && !keys.empty(); ++pass) {
+  auto consider = [&](int v, int w) {
+    if (!m_.vertex_alive[v] || !m_.vertex_alive[w] || m_.edge_face_count(v, w) != 2) return false;
+    const bool want = delaunay ? flip_improves_angle(v, w) : flip_improves_valence(v, w);
+    if (!(want && flip(v, w))) return false;
+    touched.insert(touched.end(), {v, w, last_flip_[0], last_flip_[1]});
+    return true;
+  };
+  bool converged = false;
+  for (int pass = 0; pass < 10; ++pass) {
     int n = 0;
     touched.clear();
-    for (auto k : keys) {
-      const int v = edge_key_first(k), w = edge_key_second(k);
-      if (!m_.vertex_alive[v] || !m_.vertex_alive[w] || m_.edge_face_count(v, w) != 2) continue;
-      const bool want = delaunay ? flip_improves_angle(v, w) : flip_improves_valence(v, w);
-      if (want && flip(v, w)) {
-        ++n;
-        touched.insert(touched.end(), {v, w, last_flip_[0], last_flip_[1]});
-      }
+    if (pass == 0 && incremental) {
+      n = incremental_first_sweep(keys, consider, touched);
+    } else {
+      for (auto k : keys) n += consider(edge_key_first(k), edge_key_second(k));
     }
     total += n;
-    if (n == 0) break;
+    if (n == 0) {
+      converged = true;
+      break;
+    }
     keys.clear();
     for (int u : touched)
       for (int f : m_.vfaces[u]) {
@@ -1021,11 +1119,51 @@ int Remesher::flip_pass(bool delaunay) {
     std::sort(keys.begin(), keys.end());
     keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
   }
+  memory = {converged, clock_, cos_glatt_, cos_dist_};
   return total;
+}
+
+template <class Consider>
+int Remesher::incremental_first_sweep(const std::vector<std::uint64_t>& dirty, Consider& consider,
+                                      std::vector<int>& touched) {
+  // `dirty` in key order, plus the edges a flip makes dirty ahead of the cursor.
+  std::priority_queue<std::uint64_t, std::vector<std::uint64_t>, std::greater<>> ahead;
+  std::unordered_set<std::uint64_t> pushed, created;
+  std::size_t next = 0;
+  int n = 0;
+  while (next < dirty.size() || !ahead.empty()) {
+    std::uint64_t k;
+    if (ahead.empty() || (next < dirty.size() && dirty[next] < ahead.top())) {
+      k = dirty[next++];
+    } else {
+      k = ahead.top();
+      ahead.pop();
+    }
+    const std::size_t before = touched.size();
+    if (!consider(edge_key_first(k), edge_key_second(k))) continue;
+    ++n;
+    created.insert(edge_key(touched[before + 2], touched[before + 3]));
+    for (std::size_t i = before; i < touched.size(); ++i)
+      for (int f : m_.vfaces[touched[i]]) {
+        const auto& t = m_.tri[f];
+        for (int j = 0; j < 3; ++j) {
+          const std::uint64_t e = edge_key(t[j], t[(j + 1) % 3]);
+          if (e > k && !created.count(e) && !std::binary_search(dirty.begin(), dirty.end(), e) &&
+              pushed.insert(e).second)
+            ahead.push(e);
+        }
+      }
+  }
+  return n;
 }
 
 // Moves shorter than this share of the local target edge length are not made.
 constexpr double kSettledMove = 0.02;
+// The final angle-based passes change no connectivity, only angles: there a move under 5 % of
+// the edge is not worth its checks (the smoothing took half the time with 2 %; worst angles and
+// the >= 30 deg shares stayed within 0.2 deg / 0.01 points on the corpus and the demo head,
+// docs/remeshing.md).
+constexpr double kSettledSmoothingMove = 0.02;
 
 Vec3 Remesher::voronoi_centroid(int v, const std::vector<int>& ring) const {
   // Lloyd's step: the Voronoi cell of v restricted to its star is, per star triangle (v, a, b),
@@ -1160,7 +1298,8 @@ void Remesher::relax_pass(Relax how) {
     // star bounds, embedding) cost far more than finding that out, and most vertices settle
     // after a few of the ~30 passes.
     const double h = scale_ * vs_[v].sq;
-    if (d.squaredNorm() < kSettledMove * kSettledMove * h * h) {
+    const double settled = how == Relax::AngleBased ? kSettledSmoothingMove : kSettledMove;
+    if (d.squaredNorm() < settled * settled * h * h) {
       remember(v, Finding::Settled);
       continue;
     }
@@ -1429,7 +1568,13 @@ void Remesher::drive_dipoles(int rounds) {
     int ok = 0;
     for (auto k : m_.edges()) {
       int v = edge_key_first(k), w = edge_key_second(k);
-      if (!m_.vertex_alive[v] || !m_.vertex_alive[w] || is_skel(v, w)) continue;
+      if (!m_.vertex_alive[v] || !m_.vertex_alive[w]) continue;
+      // Most edges join two free vertices that are not a black-white pair: known from the
+      // cached valences, without the edge's faces.
+      if (vs_[v].kind == VertexKind::Free && vs_[w].kind == VertexKind::Free &&
+          (m_.valence(v) - 6) * (m_.valence(w) - 6) >= 0)
+        continue;
+      if (is_skel(v, w)) continue;
       const auto ef = m_.edge_faces(v, w);
       if (ef.size() != 2) continue;
       int dv = deviation(v, ef[0]), dw = deviation(w, ef[0]);
@@ -1706,6 +1851,7 @@ RemeshResult Remesher::run() {
     s.iface = f;
     s.bary = Vec3(t[0] == v, t[1] == v, t[2] == v);
     s.sq = sq_of(s);
+    s.normal = free_normal(s);
   }
   sedge_ = sk_.edge_segment;
   seg_edges_.assign(sk_.segments.size(), 0);
