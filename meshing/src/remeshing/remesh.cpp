@@ -1163,7 +1163,7 @@ constexpr double kSettledMove = 0.02;
 // the edge is not worth its checks (the smoothing took half the time with 2 %; worst angles and
 // the >= 30 deg shares stayed within 0.2 deg / 0.01 points on the corpus and the demo head,
 // docs/remeshing.md).
-constexpr double kSettledSmoothingMove = 0.02;
+constexpr double kSettledSmoothingMove = 0.05;
 
 Vec3 Remesher::voronoi_centroid(int v, const std::vector<int>& ring) const {
   // Lloyd's step: the Voronoi cell of v restricted to its star is, per star triangle (v, a, b),
