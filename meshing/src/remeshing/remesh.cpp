@@ -210,6 +210,8 @@ class Remesher {
   FlipSweepMemory valence_sweep_, angle_sweep_;
   // Edges of the faces at vertices stamped after `at`, sorted.
   std::vector<std::uint64_t> edges_near_changes_since(std::uint64_t at) const;
+  // Edges of the faces at these vertices, sorted, each once.
+  std::vector<std::uint64_t> face_edges_at(const std::vector<int>& vertices) const;
   template <class Consider>
   int incremental_first_sweep(const std::vector<std::uint64_t>& dirty, Consider& consider,
                               std::vector<int>& touched);
@@ -1060,8 +1062,12 @@ std::vector<std::uint64_t> Remesher::edges_near_changes_since(std::uint64_t at) 
   // Past a quarter of the vertices, gathering and sorting the face edges costs more than the
   // vertex-by-vertex list of all edges.
   if (4 * dirty.size() > static_cast<std::size_t>(m_.vertex_count())) return m_.edges();
+  return face_edges_at(dirty);
+}
+
+std::vector<std::uint64_t> Remesher::face_edges_at(const std::vector<int>& vertices) const {
   std::vector<std::uint64_t> keys;
-  for (int u : dirty)
+  for (int u : vertices)
     for (int f : m_.vfaces[u]) {
       const auto& t = m_.tri[f];
       for (int i = 0; i < 3; ++i) keys.push_back(edge_key(t[i], t[(i + 1) % 3]));
@@ -1110,14 +1116,7 @@ int Remesher::flip_pass(bool delaunay) {
       converged = true;
       break;
     }
-    keys.clear();
-    for (int u : touched)
-      for (int f : m_.vfaces[u]) {
-        const auto& t = m_.tri[f];
-        for (int i = 0; i < 3; ++i) keys.push_back(edge_key(t[i], t[(i + 1) % 3]));
-      }
-    std::sort(keys.begin(), keys.end());
-    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    keys = face_edges_at(touched);
   }
   memory = {converged, clock_, cos_glatt_, cos_dist_};
   return total;
