@@ -1096,7 +1096,8 @@ int Remesher::flip_pass(bool delaunay) {
   std::vector<std::uint64_t> keys = incremental ? edges_near_changes_since(memory.at) : m_.edges();
   std::vector<int> touched;
   auto consider = [&](int v, int w) {
-    if (!m_.vertex_alive[v] || !m_.vertex_alive[w] || m_.edge_face_count(v, w) != 2) return false;
+    // Both tests answer no for an edge without exactly two faces (no separate count needed).
+    if (!m_.vertex_alive[v] || !m_.vertex_alive[w]) return false;
     const bool want = delaunay ? flip_improves_angle(v, w) : flip_improves_valence(v, w);
     if (!(want && flip(v, w))) return false;
     touched.insert(touched.end(), {v, w, last_flip_[0], last_flip_[1]});
