@@ -323,6 +323,16 @@ class Remesher {
   std::vector<double> psi0_, sq0_;
   std::vector<std::array<Vec3, 3>> cn_;  // per input face: per-patch corner normals
   std::vector<Vec3> fn0_;
+  // Per input face: a ball holding it (centroid, farthest corner). The projection walk skips
+  // a face whose ball lies farther from x than the best foot found so far.
+  std::vector<std::pair<Vec3, double>> face_ball_;
+  bool farther_than(int f, const Vec3& x, double best_squared) const {
+    const auto& [centre, radius] = face_ball_[f];
+    const double to_centre = (x - centre).norm();
+    // Slack for rounding: skipping must never drop a face the exact test would take.
+    const double gap = to_centre - radius - 1e-9 * (to_centre + radius);
+    return gap > 0 && gap * gap > best_squared;
+  }
   NmMesh m_;
   std::vector<VState> vs_;
   std::vector<int> patch_;
@@ -380,6 +390,14 @@ void Remesher::build_input() {
   const int nf = static_cast<int>(m0_.tri.size());
   fn0_.resize(nf);
   for (int f = 0; f < nf; ++f) fn0_[f] = m0_.face_normal(f);
+  face_ball_.resize(nf);
+  for (int f = 0; f < nf; ++f) {
+    const auto& t = m0_.tri[f];
+    const Vec3 c = (m0_.pos[t[0]] + m0_.pos[t[1]] + m0_.pos[t[2]]) / 3.0;
+    double r = 0;
+    for (int i : t) r = std::max(r, (m0_.pos[i] - c).norm());
+    face_ball_[f] = {c, r};
+  }
   // Angle-weighted vertex normals per (vertex, patch): a skeleton vertex has one per side.
   cn_.assign(nf, {Vec3::Zero(), Vec3::Zero(), Vec3::Zero()});
   for (int v = 0; v < static_cast<int>(m0_.pos.size()); ++v) {
@@ -469,6 +487,7 @@ void Remesher::project(const Vec3& x, int& face, Vec3& bary) const {
       for (int g : m0_.vfaces[c]) {
         if (walk_mark_[g] == walk_stamp_ || sk_.face_patch[g] != patch) continue;
         walk_mark_[g] = walk_stamp_;
+        if (farther_than(g, x, best)) continue;
         const double d = eval(g, b);
         if (d < best * (1 - 1e-12) - 1e-18) {
           best = d;
