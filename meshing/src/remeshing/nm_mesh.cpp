@@ -91,42 +91,9 @@ void NmMesh::replace_corner(int f, int from, int to) {
     }
 }
 
-EdgeFaceList NmMesh::edge_faces(int v, int w) const {
-  EdgeFaceList out;
-  for (int f : vfaces[v]) {
-    const auto& t = tri[f];
-    if (t[0] == w || t[1] == w || t[2] == w) out.push_back(f);
-  }
-  return out;
-}
-
-int NmMesh::edge_face_count(int v, int w) const {
-  int n = 0;
-  for (int f : vfaces[v]) {
-    const auto& t = tri[f];
-    n += (t[0] == w || t[1] == w || t[2] == w) ? 1 : 0;
-  }
-  return n;
-}
-
-NeighbourList NmMesh::neighbours(int v) const {
-  NeighbourList out;
-  for (int f : vfaces[v])
-    for (int c : tri[f])
-      if (c != v && std::find(out.begin(), out.end(), c) == out.end()) out.push_back(c);
-  return out;
-}
-
 void NmMesh::forget_valences(int f) {
   for (int c : tri[f])
     if (c < static_cast<int>(valence_cache_.size())) valence_cache_[c] = -1;
-}
-
-int NmMesh::valence(int v) const {
-  if (v >= static_cast<int>(valence_cache_.size())) return count_neighbours(v);
-  int& cached = valence_cache_[v];
-  if (cached < 0) cached = count_neighbours(v);
-  return cached;
 }
 
 int NmMesh::count_neighbours(int v) const {
@@ -165,12 +132,6 @@ std::vector<std::uint64_t> NmMesh::edges() const {
   }
   out.resize(n);
   return out;
-}
-
-int NmMesh::opposite(int f, int v, int w) const {
-  for (int c : tri[f])
-    if (c != v && c != w) return c;
-  return -1;
 }
 
 Eigen::Vector3d NmMesh::face_normal(int f) const {

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -103,5 +104,47 @@ class NmMesh {
   int live_vertices_ = 0, live_faces_ = 0;
   mutable std::vector<int> valence_cache_;  // per vertex, -1: not known
 };
+
+// The adjacency queries are inline: the remesher asks for them millions of times per run
+// from another translation unit.
+
+inline EdgeFaceList NmMesh::edge_faces(int v, int w) const {
+  EdgeFaceList out;
+  for (int f : vfaces[v]) {
+    const auto& t = tri[f];
+    if (t[0] == w || t[1] == w || t[2] == w) out.push_back(f);
+  }
+  return out;
+}
+
+inline int NmMesh::edge_face_count(int v, int w) const {
+  int n = 0;
+  for (int f : vfaces[v]) {
+    const auto& t = tri[f];
+    n += (t[0] == w || t[1] == w || t[2] == w) ? 1 : 0;
+  }
+  return n;
+}
+
+inline NeighbourList NmMesh::neighbours(int v) const {
+  NeighbourList out;
+  for (int f : vfaces[v])
+    for (int c : tri[f])
+      if (c != v && std::find(out.begin(), out.end(), c) == out.end()) out.push_back(c);
+  return out;
+}
+
+inline int NmMesh::valence(int v) const {
+  if (v >= static_cast<int>(valence_cache_.size())) return count_neighbours(v);
+  int& cached = valence_cache_[v];
+  if (cached < 0) cached = count_neighbours(v);
+  return cached;
+}
+
+inline int NmMesh::opposite(int f, int v, int w) const {
+  for (int c : tri[f])
+    if (c != v && c != w) return c;
+  return -1;
+}
 
 }  // namespace scanmesh::remeshing
