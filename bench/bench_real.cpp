@@ -2,8 +2,7 @@
 // and meshes, tests/real_corpus.cmake), same input, same run; one Markdown table per file
 // (docs/benchmarks.md, "Real scans (bench_real)"):
 //   clouds:    fans vs CGAL advancing front vs PCL GP3
-//   meshes:    seed 001 remesh (the CLI's defaults, timed once) vs CGAL isotropic_remeshing, both
-//   at the
+//   meshes:    seed 001 remesh (the CLI's defaults) vs CGAL isotropic_remeshing, both at the
 //              input's vertex count
 //   every file: import_scan to a grid, grid_mesh of it, and grid-quadric / quadric curvature of
 //              the grid vs PCL NormalEstimationOMP + PrincipalCurvaturesEstimation on the same
@@ -173,8 +172,9 @@ Row remesh_row(const std::string& method, const std::string& threads, double sec
   return row;
 }
 
-// Timed once per thread count: the remesher is the slow stage, serial apart from the density
-// estimate; the 1-thread row is the same-thread-count comparison with CGAL.
+// Median of g_runs per thread count, CGAL's too (one run each varied by +-25 % on the shared VM);
+// the remesher is serial apart from the density estimate, so the 1-thread row is the
+// same-thread-count comparison with CGAL.
 void compare_remeshers(const Mesh& in) {
   const int target = static_cast<int>(in.positions.size());
   const double edge = median_edge_length(in);
@@ -185,7 +185,7 @@ void compare_remeshers(const Mesh& in) {
   input.notes += std::to_string(target) + " vertices, median edge " + fmt("%.4g", edge);
   print(input);
   remeshing::RemeshResult ours;
-  const double t_ours = bench::time_median(1, [&] { ours = remeshing::remesh(in, o); });
+  const double t_ours = timed([&] { ours = remeshing::remesh(in, o); });
   Row r = remesh_row("scanmesh remesh", std::to_string(omp_get_max_threads()), t_ours, ours.mesh,
                      in, edge);
   bench::CgalSurfaceMesh base;
@@ -194,7 +194,7 @@ void compare_remeshers(const Mesh& in) {
     print(r);
     return;
   }
-  const auto cgal = bench::cgal_remesh_to_count(base, scanmesh::surface_area(in), target);
+  const auto cgal = bench::cgal_remesh_to_count(base, scanmesh::surface_area(in), target, g_runs);
   r.ratio = fmt("%.2f", cgal.seconds / t_ours);
   print(r);
   if (omp_get_max_threads() > 1) {
@@ -202,7 +202,7 @@ void compare_remeshers(const Mesh& in) {
     const int threads = omp_get_max_threads();
     omp_set_num_threads(1);
     remeshing::RemeshResult serial;
-    const double t1 = bench::time_median(1, [&] { serial = remeshing::remesh(in, o); });
+    const double t1 = timed([&] { serial = remeshing::remesh(in, o); });
     omp_set_num_threads(threads);
     Row r1 = remesh_row("scanmesh remesh", "1", t1, serial.mesh, in, edge);
     r1.ratio = fmt("%.2f", cgal.seconds / t1);
