@@ -70,6 +70,14 @@ Vec3 closest_barycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3
   return {1 - v - w, v, w};
 }
 
+// Sets a pointer member back to null when the scope that pointed it somewhere ends, on every
+// exit (the drive's stamp journal, the drive rounds' flip record).
+template <class T>
+struct ClearOnExit {
+  T*& pointer;
+  ~ClearOnExit() { pointer = nullptr; }
+};
+
 struct VState {
   VertexKind kind = VertexKind::Free;
   int seg = -1;        // skeleton: segment of the input skeleton
@@ -970,10 +978,7 @@ bool Remesher::drive(int b, int w, int side) {
   std::vector<std::array<int, 2>> log;
   std::vector<std::pair<int, std::uint64_t>> journal;
   altered_journal_ = &journal;
-  struct StopJournal {
-    std::vector<std::pair<int, std::uint64_t>>*& journal;
-    ~StopJournal() { journal = nullptr; }
-  } stop{altered_journal_};
+  const ClearOnExit stop{altered_journal_};
   int total = 0;
   for (int step = 0; step < o_.drive_limit; ++step) {
     const auto ef = m_.edge_faces(b, w);
@@ -1656,10 +1661,7 @@ void Remesher::drive_dipoles(int rounds) {
   // change the mesh here, so each round's edge list is the last one with its flips applied
   // (listing every edge again was ~4 % of a remesh at the input's count).
   std::vector<std::array<std::uint64_t, 2>> record;
-  struct StopRecord {
-    std::vector<std::array<std::uint64_t, 2>>*& record;
-    ~StopRecord() { record = nullptr; }
-  } stop{flip_record_};
+  const ClearOnExit stop{flip_record_};
   std::vector<std::uint64_t> edges = m_.edges();
   for (int round = 0; round < rounds; ++round) {
     int ok = 0;
