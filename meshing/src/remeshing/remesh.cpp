@@ -72,10 +72,12 @@ Vec3 closest_barycentric(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3
 
 // Sets a pointer member back to null when the scope that pointed it somewhere ends, on every
 // exit (the drive's stamp journal, the drive rounds' flip record).
+// (A constructor, not an aggregate: clang 14 deduces T from constructors only.)
 template <class T>
 struct ClearOnExit {
-  T*& pointer;
+  explicit ClearOnExit(T*& p) : pointer(p) {}
   ~ClearOnExit() { pointer = nullptr; }
+  T*& pointer;
 };
 
 struct VState {
