@@ -180,46 +180,60 @@ void Board::set_feed_rate(double deg_per_s) {
 
 void Board::shutdown() noexcept {
   // Each command on its own: a board with one laser refuses "laser 2", which must not keep the
-  // motor from being released.
-  for (int i = 0; i < 2; ++i) {
+  // motor from being released. One attempt each, and once a command met silence (the usual
+  // reason to shut down early: the board stalled or hangs in a move) the rest are only sent:
+  // waiting out three attempts of three commands kept a user ~27 s at a dead board.
+  bool silent = false;
+  for (const std::string& text :
+       {dialect_->laser(0, false), dialect_->laser(1, false), dialect_->motor(false)}) {
     try {
-      set_laser(i, false);
+      if (silent) {
+        transport_->write(text + dialect_->line_terminator());
+        continue;
+      }
+      // A garbled reply means a live board that may not have switched: that one is repeated.
+      std::string problem;
+      Attempt result = Attempt::Garbled;
+      for (int i = 0; i <= options_.retries && result == Attempt::Garbled; ++i) {
+        if (i > 0) transport_->discard_input();
+        result = attempt(text, options_.command_timeout, problem);
+      }
+      silent = result == Attempt::Silent;
     } catch (...) {
     }
   }
-  try {
-    set_motor(false);
-  } catch (...) {
+}
+
+Board::Attempt Board::attempt(const std::string& text, std::chrono::milliseconds timeout,
+                              std::string& problem) {
+  transport_->write(text + dialect_->line_terminator());
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  for (;;) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) break;
+    const auto line = transport_->read_line(left);
+    if (!line) break;
+    const BoardReply reply = dialect_->parse_reply(*line);
+    if (reply.kind == BoardReply::Kind::Ok) return Attempt::Ok;
+    if (reply.kind == BoardReply::Kind::Error)
+      throw DeviceError(transport_->name(), "board refused '" + text + "': " + reply.text);
+    if (reply.kind == BoardReply::Kind::Other && !reply.text.empty()) {
+      // Neither ok nor error: a garbled acknowledgement. Whether the command ran is unknown.
+      problem = "garbled reply '" + reply.text.substr(0, 40) + "' to '" + text + "'";
+      return Attempt::Garbled;
+    }
   }
+  problem = "no 'ok' for '" + text + "' within " + std::to_string(timeout.count()) + " ms";
+  return Attempt::Silent;
 }
 
 void Board::command(const std::string& text, std::chrono::milliseconds timeout, Retry retry) {
   const int attempts = retry == Retry::Safe ? 1 + std::max(0, options_.retries) : 1;
   std::string last_problem;
-  for (int attempt = 0; attempt < attempts; ++attempt) {
-    if (attempt > 0) transport_->discard_input();
-    transport_->write(text + dialect_->line_terminator());
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    bool garbled = false;
-    for (;;) {
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
-          deadline - std::chrono::steady_clock::now());
-      if (left.count() <= 0) break;
-      const auto line = transport_->read_line(left);
-      if (!line) break;
-      const BoardReply reply = dialect_->parse_reply(*line);
-      if (reply.kind == BoardReply::Kind::Ok) return;
-      if (reply.kind == BoardReply::Kind::Error)
-        throw DeviceError(transport_->name(), "board refused '" + text + "': " + reply.text);
-      if (reply.kind == BoardReply::Kind::Other && !reply.text.empty()) {
-        // Neither ok nor error: a garbled acknowledgement. Whether the command ran is unknown.
-        garbled = true;
-        last_problem = "garbled reply '" + reply.text.substr(0, 40) + "' to '" + text + "'";
-        break;
-      }
-    }
-    if (!garbled)
-      last_problem = "no 'ok' for '" + text + "' within " + std::to_string(timeout.count()) + " ms";
+  for (int i = 0; i < attempts; ++i) {
+    if (i > 0) transport_->discard_input();
+    if (attempt(text, timeout, last_problem) == Attempt::Ok) return;
   }
   throw DeviceError(
       transport_->name(),

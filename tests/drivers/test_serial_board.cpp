@@ -54,6 +54,35 @@ TEST(SerialBoard, ShutdownReleasesTheMotorEvenIfALaserIsRefused) {
   EXPECT_FALSE(rig.pty.firmware().motor_enabled());
 }
 
+// A board gone mute (a stalled tty) is the usual reason to shut down early: the first command
+// waits once, the other two are only sent (each command once, not three attempts of three).
+TEST(SerialBoard, ShutdownOfAMuteBoardWaitsForOneCommandOnly) {
+  Rig rig;
+  Board board = rig.make_board();
+  board.connect();
+  board.set_laser(0, true);
+  const int n = rig.pty.firmware().commands_received();
+  rig.pty.firmware().set_faults({.stall_at_command = n + 1});
+  board.shutdown();
+  EXPECT_TRUE(rig.pty.firmware().stalled());
+  EXPECT_EQ(rig.pty.firmware().commands_received(), n + 3);
+}
+
+// A garbled acknowledgement of "laser off" comes from a live board that may not have switched:
+// that command is repeated, and the rest of the shutdown waits for its answers as usual.
+TEST(SerialBoard, ShutdownRepeatsAGarbledLaserOff) {
+  Rig rig;
+  Board board = rig.make_board();
+  board.connect();
+  board.set_laser(0, true);
+  const int n = rig.pty.firmware().commands_received();
+  rig.pty.firmware().set_faults({.garble_ok_at_command = n + 1});
+  board.shutdown();
+  EXPECT_EQ(rig.pty.firmware().commands_received(), n + 4);
+  EXPECT_EQ(rig.pty.firmware().laser_mask(), 0u);
+  EXPECT_FALSE(rig.pty.firmware().motor_enabled());
+}
+
 // 30 steps per turn are 106.67 microsteps each: a resumed scan must round its targets exactly
 // as the uninterrupted one, so it declares its position in the firmware's coordinates.
 TEST(SerialBoard, DeclaredPositionLandsOnTheSameMicrostepsAsAnUninterruptedRun) {

@@ -84,6 +84,8 @@ class Board {
   void set_motor(bool enabled);
   void set_feed_rate(double deg_per_s);
   //! Lasers off and motor released; errors are swallowed (used on the way out of a failure).
+  //! One attempt per command; after the first that meets silence the rest are sent without
+  //! waiting, so a dead board holds the caller one command timeout, not nine.
   void shutdown() noexcept;
   double angle_rad() const { return angle_rad_; }
   std::string device_name() const { return transport_->name(); }
@@ -93,6 +95,11 @@ class Board {
  private:
   enum class Retry { Safe, Never };
   void command(const std::string& text, std::chrono::milliseconds timeout, Retry retry);
+  //! One send and wait: an "ok", a garbled reply, or nothing within `timeout` (`problem` then
+  //! says which). An "error:" reply throws.
+  enum class Attempt { Ok, Garbled, Silent };
+  Attempt attempt(const std::string& text, std::chrono::milliseconds timeout,
+                  std::string& problem);
   std::chrono::milliseconds move_timeout(double degrees) const;
 
   std::unique_ptr<Transport> transport_;
