@@ -51,6 +51,12 @@ struct Element {
 };
 
 class Skeletal final : public SceneObject {
+  //! Where an element's support (its sphere or capsule of influence) meets a ray.
+  struct Support {
+    double t0, t1;
+    int element;
+  };
+
  public:
   Skeletal(std::vector<Element> elements, double iso) : el_(std::move(elements)), iso_(iso) {}
 
@@ -96,10 +102,6 @@ class Skeletal final : public SceneObject {
   std::optional<double> intersect(const Vector3d& o, const Vector3d& d, double t_min,
                                   double t_max) const override {
     // 1. Support intervals of the elements along the ray (sphere / capsule of radius R_i).
-    struct Support {
-      double t0, t1;
-      int element;
-    };
     Support buf[64];
     std::vector<Support> heap;
     Support* supports = buf;
@@ -120,24 +122,11 @@ class Skeletal final : public SceneObject {
               [](const Support& p, const Support& q) { return p.t0 < q.t0; });
     // 2. March each connected group of supports; F = 0 between groups, so a crossing can
     //    only lie inside a group.
-    int active[64];
-    std::vector<int> active_heap;
-    int* act = active;
-    if (count > 64) {
-      active_heap.resize(count);
-      act = active_heap.data();
-    }
     for (int g = 0; g < count;) {
       double g0 = supports[g].t0, g1 = supports[g].t1;
-      int n = 0;
-      double lipschitz = 0.0;
       int h = g;
-      for (; h < count && supports[h].t0 <= g1; ++h) {
-        g1 = std::max(g1, supports[h].t1);
-        act[n++] = supports[h].element;
-        lipschitz += el_[supports[h].element].slope;
-      }
-      if (auto t = march(o, d, g0, g1, act, n, lipschitz)) return t;
+      for (; h < count && supports[h].t0 <= g1; ++h) g1 = std::max(g1, supports[h].t1);
+      if (auto t = march(o, d, g0, g1, supports + g, h - g)) return t;
       g = h;
     }
     return std::nullopt;
@@ -155,17 +144,21 @@ class Skeletal final : public SceneObject {
   }
 
  private:
-  // Value of F - iso along the ray and its derivative d/dt, from the active elements only.
-  double eval(const Vector3d& x, const Vector3d& d, const int* act, int n, double* slope) const {
+  // Value of F - iso at o + t d and its derivative d/dt, from the elements whose support holds
+  // t (the others add nothing there: the kernel is zero outside its radius).
+  double eval(const Vector3d& o, const Vector3d& d, double t, const Support* supports, int n,
+              double* slope) const {
+    const Vector3d x = o + t * d;
     double sum = 0.0, deriv = 0.0;
     for (int k = 0; k < n; ++k) {
-      const Element& e = el_[act[k]];
+      if (t < supports[k].t0 || t > supports[k].t1) continue;
+      const Element& e = el_[supports[k].element];
       Vector3d diff;
       if (e.type == SkeletonElement::Type::Point) {
         diff = x - e.a;
       } else {
-        const double t = std::clamp((x - e.a).dot(e.u), 0.0, e.len);
-        diff = x - e.a - t * e.u;
+        const double along = std::clamp((x - e.a).dot(e.u), 0.0, e.len);
+        diff = x - e.a - along * e.u;
       }
       const double s = diff.squaredNorm();
       if (s >= e.r2) continue;
@@ -179,19 +172,37 @@ class Skeletal final : public SceneObject {
     return sum - iso_;
   }
 
+  // The longest step from t over which F - iso = g cannot reach zero. An element changes F only
+  // inside its support, by at most its slope per mm, so over [t, t + s] F changes by at most s
+  // times the summed slopes of the supports that window meets. That sum grows with s at each
+  // support's start (`supports` sorted by t0): the step is |g| / (the sum up to the start it
+  // stops short of). The summed slope of the whole group, used before, made the head's rays
+  // take several times as many steps where one element's support overlaps a dozen others.
+  double safe_step(double t, double g, const Support* supports, int n) const {
+    double lipschitz = 0.0;
+    int k = 0;
+    for (; k < n && supports[k].t0 <= t; ++k)
+      if (supports[k].t1 >= t) lipschitz += el_[supports[k].element].slope;
+    for (;; ++k) {
+      const double step = lipschitz > 0.0 ? std::abs(g) / lipschitz
+                                           : std::numeric_limits<double>::infinity();
+      if (k == n || t + step <= supports[k].t0) return step;
+      lipschitz += el_[supports[k].element].slope;
+    }
+  }
+
   std::optional<double> march(const Vector3d& o, const Vector3d& d, double t0, double t1,
-                              const int* act, int n, double lipschitz) const {
+                              const Support* supports, int n) const {
     double t = t0;
-    double g = eval(o + t * d, d, act, n, nullptr);
+    double g = eval(o, d, t, supports, n, nullptr);
     if (g == 0.0) return t;
     const bool inside0 = g > 0.0;
     while (t < t1) {
-      // |dF/dt| <= lipschitz, so F - iso keeps its sign for |g| / lipschitz.
-      const double step = std::max(std::abs(g) / lipschitz, kMinStepMm);
+      const double step = std::max(safe_step(t, g, supports, n), kMinStepMm);
       const double tn = std::min(t + step, t1);
-      const double gn = eval(o + tn * d, d, act, n, nullptr);
+      const double gn = eval(o, d, tn, supports, n, nullptr);
       if (gn == 0.0) return tn;
-      if ((gn > 0.0) != inside0) return refine(o, d, t, tn, inside0, act, n);
+      if ((gn > 0.0) != inside0) return refine(o, d, t, tn, inside0, supports, n);
       t = tn;
       g = gn;
     }
@@ -200,11 +211,11 @@ class Skeletal final : public SceneObject {
 
   // Safeguarded Newton on a bracket [lo, hi] with the sign change; ends within 1e-9 mm.
   double refine(const Vector3d& o, const Vector3d& d, double lo, double hi, bool inside_lo,
-                const int* act, int n) const {
+                const Support* supports, int n) const {
     double x = 0.5 * (lo + hi);
     for (int it = 0; it < 100 && hi - lo > kRootTolMm; ++it) {
       double slope = 0.0;
-      const double g = eval(o + x * d, d, act, n, &slope);
+      const double g = eval(o, d, x, supports, n, &slope);
       if (g == 0.0) return x;
       ((g > 0.0) == inside_lo ? lo : hi) = x;
       double next = slope != 0.0 ? x - g / slope : 0.5 * (lo + hi);
