@@ -55,6 +55,8 @@ struct Element {
   Vector3d a, b, u;  // u = unit segment direction
   double len = 0.0, radius = 1.0, r2 = 1.0, weight = 1.0, slope = 0.0;
   double bend = 0.0;  // bound of |d^2 F_i / dt^2| along any ray (kKernelBendBound)
+  Vector3d centre;    // a ball holding the support, for a cheap miss test
+  double reach2 = 0.0;
 };
 
 class Skeletal final : public SceneObject {
@@ -118,6 +120,10 @@ class Skeletal final : public SceneObject {
       supports = heap.data();
     }
     for (int k = 0; k < static_cast<int>(el_.size()); ++k) {
+      // Most elements lie off a given ray: a ray that misses the ball misses the support.
+      const Vector3d q = o - el_[k].centre;
+      const double along = q.dot(d);
+      if (q.squaredNorm() - along * along > el_[k].reach2) continue;
       const auto iv = support_interval(el_[k], o, d);
       if (!iv) continue;
       const double t0 = std::max(iv->first, t_min), t1 = std::min(iv->second, t_max);
@@ -305,11 +311,17 @@ std::shared_ptr<const SceneObject> make_skeletal(std::vector<SkeletonElement> el
     e.weight = s.weight;
     e.slope = std::abs(s.weight) * wyvill_max_slope() / s.radius;
     e.bend = std::abs(s.weight) * kKernelBendBound / e.r2;
+    e.centre = s.a;
     if (s.type == SkeletonElement::Type::Segment) {
       e.len = (s.b - s.a).norm();
       if (!(e.len > 1e-9)) throw InvalidInputError(who + ": segment has zero length");
       e.u = (s.b - s.a) / e.len;
+      e.centre = 0.5 * (s.a + s.b);
     }
+    // Widened by a part in 10^6: the miss test must never drop an element the exact
+    // interval would keep.
+    const double reach = e.radius + 0.5 * e.len;
+    e.reach2 = reach * reach * (1.0 + 1e-6) + 1e-9;
     el.push_back(e);
   }
   return std::make_shared<Skeletal>(std::move(el), iso);
