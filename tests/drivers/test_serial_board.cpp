@@ -54,14 +54,20 @@ TEST(SerialBoard, ShutdownReleasesTheMotorEvenIfALaserIsRefused) {
   EXPECT_FALSE(rig.pty.firmware().motor_enabled());
 }
 
+// Connects and switches laser 1 on; returns the firmware's command count, to arm a fault at the
+// next command.
+int connect_with_laser_on(Rig& rig, Board& board) {
+  board.connect();
+  board.set_laser(0, true);
+  return rig.pty.firmware().commands_received();
+}
+
 // A board gone mute (a stalled tty) is the usual reason to shut down early: the first command
 // waits once, the other two are only sent (each command once, not three attempts of three).
 TEST(SerialBoard, ShutdownOfAMuteBoardWaitsForOneCommandOnly) {
   Rig rig;
   Board board = rig.make_board();
-  board.connect();
-  board.set_laser(0, true);
-  const int n = rig.pty.firmware().commands_received();
+  const int n = connect_with_laser_on(rig, board);
   rig.pty.firmware().set_faults({.stall_at_command = n + 1});
   board.shutdown();
   EXPECT_TRUE(rig.pty.firmware().stalled());
@@ -73,9 +79,7 @@ TEST(SerialBoard, ShutdownOfAMuteBoardWaitsForOneCommandOnly) {
 TEST(SerialBoard, ShutdownRepeatsAGarbledLaserOff) {
   Rig rig;
   Board board = rig.make_board();
-  board.connect();
-  board.set_laser(0, true);
-  const int n = rig.pty.firmware().commands_received();
+  const int n = connect_with_laser_on(rig, board);
   rig.pty.firmware().set_faults({.garble_ok_at_command = n + 1});
   board.shutdown();
   EXPECT_EQ(rig.pty.firmware().commands_received(), n + 4);
