@@ -1,6 +1,9 @@
 // The real termios transport and board driver against the simulated firmware behind a pty.
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <thread>
+
 #include "board_test_support.h"
 #include "scanmesh/drivers/serial_transport.h"
 #include "scanmesh/sim/pty_board.h"
@@ -70,6 +73,11 @@ TEST(SerialBoard, ShutdownOfAMuteBoardWaitsForOneCommandOnly) {
   const int n = connect_with_laser_on(rig, board);
   rig.pty.firmware().set_faults({.stall_at_command = n + 1});
   board.shutdown();
+  // The last two are only written: the firmware's thread reads them a moment later.
+  const auto deadline = std::chrono::steady_clock::now() + test::kPatientTimeout;
+  while (rig.pty.firmware().commands_received() < n + 3 &&
+         std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
   EXPECT_TRUE(rig.pty.firmware().stalled());
   EXPECT_EQ(rig.pty.firmware().commands_received(), n + 3);
 }
