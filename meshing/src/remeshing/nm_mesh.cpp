@@ -27,6 +27,14 @@ NmMesh::NmMesh(const Mesh& mesh) {
       throw InvalidInputError("remesh: triangle " + std::to_string(f) + " repeats a corner");
     add_face(t[0], t[1], t[2], mesh.has_face_labels() ? mesh.face_labels[f] : 0);
   }
+  // A vertex in no triangle (an OBJ's unused vertex) is not part of the surface: alive it would
+  // count toward the remesher's target without ever getting a face, and the output would miss
+  // the target by as many.
+  for (int v = 0; v < n; ++v)
+    if (vfaces[v].empty()) {
+      vertex_alive[v] = 0;
+      --live_vertices_;
+    }
 }
 
 int NmMesh::add_vertex(const Eigen::Vector3d& x) {

@@ -291,6 +291,20 @@ TEST(Remesh, DeterministicAndRejectsBadTargets) {
   EXPECT_THROW(remesh(Mesh{}, {}), InvalidInputError);
 }
 
+TEST(Remesh, UnusedInputVerticesDoNotCountTowardTheTarget) {
+  // An OBJ may list vertices no face uses. They used to count as live vertices the remesher
+  // could never remove: 50 of them made a 300-vertex target give 250.
+  Mesh in = test::sphere(10.0, 20, 40);
+  for (int i = 0; i < 50; ++i) in.positions.push_back({30.0 + i, 0.0, 0.0});
+  RemeshOptions o;
+  o.target_vertices = 300;
+  const RemeshResult r = remesh(in, o);
+  EXPECT_EQ(r.mesh.positions.size(), 300u);
+  EXPECT_EQ(r.stats.input_vertices, static_cast<int>(in.positions.size()) - 50);
+  EXPECT_EQ(topology_stats(r.mesh).unreferenced_vertices, 0u);
+  EXPECT_NO_THROW(require_vertex_count(r, 300, 0));
+}
+
 TEST(Prepare, DropsCrumbsAndClosesSmallHoles) {
   Mesh in = test::wavy_sheet(6, 3, nullptr);
   // A detached triangle far away.

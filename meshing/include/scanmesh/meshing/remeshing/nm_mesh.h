@@ -57,8 +57,9 @@ using NeighbourList = SmallIndexList<16>;  //!< a ring
 class NmMesh {
  public:
   NmMesh() = default;
-  //! Copies positions, triangles and labels (label 0 when the mesh has none). Throws
-  //! InvalidInputError for bad indices or triangles with a repeated corner.
+  //! Copies positions, triangles and labels (label 0 when the mesh has none); vertices in no
+  //! triangle are kept in `pos` but not live. Throws InvalidInputError for bad indices or
+  //! triangles with a repeated corner.
   explicit NmMesh(const Mesh& mesh);
 
   std::vector<Eigen::Vector3d> pos;
