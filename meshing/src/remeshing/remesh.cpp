@@ -34,6 +34,11 @@ namespace {
 
 using Vec3 = Eigen::Vector3d;
 
+// The length rules of the adapt rounds (§3.4), in target lengths h: edges longer than
+// kSplitAbove are split, edges shorter than kCollapseBelow collapsed.
+constexpr double kSplitAbove = 4.0 / 3.0;
+constexpr double kCollapseBelow = 0.8;
+
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -300,6 +305,10 @@ class Remesher {
   // survivor (1.6 kept the >= 30 deg share of the corpus and the demo head where the split
   // bound 4/3 let the count adjustment fall back to length order more often; measured).
   static constexpr double kLongAfterCollapse = 1.6;
+  // (4.5) splits no skeleton edge shorter than the collapse bound (0.8 target lengths).
+  bool too_short_to_split(int v, int w) const {
+    return (m_.pos[v] - m_.pos[w]).norm() < kCollapseBelow * target(v, w);
+  }
   // Whether collapse(v, w) would leave an edge longer than `bound` target lengths at w: among
   // v's edges alone (collapse_short, bound 4/3) or also w's own (the count adjustment).
   enum class CollapseEnds { RemovedOnly, Both };
@@ -1056,7 +1065,7 @@ void Remesher::split_long() {
   for (auto k : es) {
     const int v = edge_key_first(k), w = edge_key_second(k);
     const double r = (m_.pos[v] - m_.pos[w]).norm() / target(v, w);
-    if (r > 4.0 / 3.0) cand.push_back({-r, k});
+    if (r > kSplitAbove) cand.push_back({-r, k});
   }
   std::sort(cand.begin(), cand.end());
   for (const auto& [r, k] : cand) {
@@ -1081,7 +1090,7 @@ void Remesher::collapse_short() {
           (!m_.vertex_alive[v] || !m_.vertex_alive[w] || m_.edge_face_count(v, w) == 0))
         continue;
       const double r = (m_.pos[v] - m_.pos[w]).norm() / target(v, w);
-      if (r < 0.8) cand.push_back({r, k});
+      if (r < kCollapseBelow) cand.push_back({r, k});
     }
     if (cand.empty()) return;
     std::sort(cand.begin(), cand.end());
@@ -1090,14 +1099,14 @@ void Remesher::collapse_short() {
     for (const auto& [r, k] : cand) {
       int v = edge_key_first(k), w = edge_key_second(k);
       if (!m_.vertex_alive[v] || !m_.vertex_alive[w] || m_.edge_face_count(v, w) == 0) continue;
-      if ((m_.pos[v] - m_.pos[w]).norm() >= 0.8 * target(v, w)) continue;
+      if ((m_.pos[v] - m_.pos[w]).norm() >= kCollapseBelow * target(v, w)) continue;
       // Remove the less constrained end; do not create edges longer than 4/3 h.
       if (vs_[v].kind != VertexKind::Free && vs_[w].kind == VertexKind::Free) std::swap(v, w);
       if (vs_[v].kind == VertexKind::Skeleton && vs_[w].kind == VertexKind::Branch) {
       } else if (vs_[v].kind == VertexKind::Branch) {
         std::swap(v, w);
       }
-      if (collapse_makes_long_edge(v, w, 4.0 / 3.0, CollapseEnds::RemovedOnly)) continue;
+      if (collapse_makes_long_edge(v, w, kSplitAbove, CollapseEnds::RemovedOnly)) continue;
       // An undone collapse restores w through its state, not bit for bit its old position.
       touched.insert(touched.end(), {v, w});
       if (collapse(v, w) || collapse(w, v)) ++done;
@@ -1404,6 +1413,11 @@ void Remesher::skeleton_relax_pass() {
 void Remesher::skeleton_density_control() {
   // (4.4) / (4.5): collapse when every side is under-connected, split when every side is
   // over-connected; the branch end of an edge is not evaluated (its d^ is undefined).
+  // No split of an edge the length rule already finds too short: where no free vertex fits
+  // between two borders (a strip about one output edge wide), each split leaves the vertex
+  // across over-connected, and the rule split both borders in turn down to a fifth of the
+  // target (needles of 5-12 deg on the demo head at 50,000-80,000 vertices; docs/remeshing.md,
+  // "Skeleton splits in narrow strips").
   std::vector<std::uint64_t> keys;
   for (const auto& [k, s] : sedge_) keys.push_back(k);
   std::sort(keys.begin(), keys.end());
@@ -1436,7 +1450,7 @@ void Remesher::skeleton_density_control() {
                    : w;
       const int keep = rm == v ? w : v;
       if (collapse(rm, keep)) ++st_.skeleton_collapses;
-    } else if (all_split) {
+    } else if (all_split && !too_short_to_split(v, w)) {
       const int u = split(v, w);
       if (u >= 0) {
         ++st_.skeleton_splits;
