@@ -753,6 +753,21 @@ TEST(Prepare, ScanOptionsFollowTheOutputScale) {
   EXPECT_EQ(ts.components, 1u);
 }
 
+TEST(Prepare, RaggedGridBorderLooksLikeAScan) {
+  // A grid mesh's border steps from row to row. With every other cell of the top row gone,
+  // each cell left there has a face with two border edges (an ear): one loop, one component,
+  // and still a scan's border. The whole sheet has two ears (its corners cut by a diagonal).
+  const Mesh sheet = sheet_with_holes(20, 10, [](int, int) { return false; });
+  const Mesh ragged = sheet_with_holes(20, 10, [](int i, int j) { return j == 9 && i % 2 == 1; });
+  const ScanSigns plain = scan_signs(sheet), steps = scan_signs(ragged);
+  EXPECT_EQ(plain.border_ears, 2u);
+  EXPECT_FALSE(looks_like_scan(sheet));
+  EXPECT_EQ(steps.boundary_loops, 1u);
+  EXPECT_EQ(steps.components, 1u);
+  EXPECT_GE(steps.border_ears, 10u);
+  EXPECT_TRUE(looks_like_scan(ragged));
+}
+
 // Median over the free vertices whose star triangles are all acute of the tangential offset
 // between the vertex and the centroid of its Voronoi cell (per triangle the quad vertex - edge
 // midpoint - circumcentre - edge midpoint), in units of the mean edge length. A centroidal

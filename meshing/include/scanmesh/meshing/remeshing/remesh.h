@@ -117,12 +117,19 @@ inline constexpr int kMaxHolePatchEdges = 400;
 double uniform_edge_length(const Mesh& mesh, int vertices);
 
 //! What makes `scanmesh remesh` run the scan clean-up by default: a mesh as a scanner writes
-//! it (more than kScanLoops boundary loops or more than kScanComponents components: pin-holes,
-//! crumbs, a ragged border). Every boundary loop is a skeleton curve the remesher must keep, so
-//! such a mesh holds thousands of fixed vertices and misses any small target.
-inline constexpr std::size_t kScanLoops = 8, kScanComponents = 8;
-bool looks_like_scan(const Mesh& mesh);
-bool looks_like_scan(const TopologyStats& stats);  //!< the same from the mesh's statistics
+//! it (more than kScanLoops boundary loops, more than kScanComponents components or more than
+//! kScanEars border ears: pin-holes, crumbs, a ragged border). Every boundary loop is a skeleton
+//! curve the remesher must keep, so such a mesh holds thousands of fixed vertices and misses any
+//! small target. An ear, a face with two or three border edges, is where a grid mesh's border
+//! steps from row to row (16-510 on imported grid meshes of the corpus with two to nine loops;
+//! 0 or 1 on the corpus meshes themselves).
+inline constexpr std::size_t kScanLoops = 8, kScanComponents = 8, kScanEars = 8;
+struct ScanSigns {
+  std::size_t boundary_loops = 0, components = 0, border_ears = 0;
+};
+ScanSigns scan_signs(const Mesh& mesh);
+bool looks_like_scan(const ScanSigns& signs);
+bool looks_like_scan(const Mesh& mesh);  //!< looks_like_scan(scan_signs(mesh))
 
 //! The clean-up for a scan remeshed to `target_vertices`, at the output's scale L
 //! (uniform_edge_length): components under 10 L^2 (about a dozen output vertices) dropped, holes
