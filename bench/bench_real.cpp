@@ -6,7 +6,8 @@
 //              input's vertex count
 //   every file: import_scan to a grid, grid_mesh of it, and grid-quadric / quadric curvature of
 //              the grid vs PCL NormalEstimationOMP + PrincipalCurvaturesEstimation on the same
-//              grid points (agreement, as there is no ground truth).
+//              grid points (agreement, as there is no ground truth); the grid mesh remeshed
+//              to its own count, as `scanmesh remesh` does it, vs CGAL isotropic_remeshing.
 // Usage: bench_real [file names, e.g. kitten.xyz head.off] [--runs N]
 #include <omp.h>
 
@@ -175,8 +176,7 @@ Row remesh_row(const std::string& method, const std::string& threads, double sec
 // Median of g_runs per thread count, CGAL's too (one run each varied by +-25 % on the shared VM);
 // the remesher is serial apart from the density estimate, so the 1-thread row is the
 // same-thread-count comparison with CGAL.
-void compare_remeshers(const Mesh& in) {
-  const int target = static_cast<int>(in.positions.size());
+void compare_remeshers(const Mesh& in, int target) {
   const double edge = median_edge_length(in);
   remeshing::RemeshOptions o;  // `scanmesh remesh --vertices <input count>`: the CLI's defaults
   o.target_vertices = target;
@@ -218,6 +218,7 @@ void compare_remeshers(const Mesh& in) {
 struct Imported {
   ImportResult result;
   Mesh input;  // the file in the grid frame (a cloud: positions only)
+  Mesh grid_mesh;
   bool cloud = false;
 };
 
@@ -258,7 +259,23 @@ Imported import_and_mesh(const fs::path& path, bool cloud) {
                  fmt("%.2f", in_out[0] / g.dh()) + " cells";
   rm.notes += "mean in->mesh " + fmt("%.2f", in_out[1] / g.dh()) + " cells";
   print(rm);
+  im.grid_mesh = std::move(gm.mesh);
   return im;
+}
+
+// The imported grid's mesh remeshed to its own vertex count as `scanmesh remesh` does it (the
+// scan clean-up first when the mesh looks like a scan); CGAL gets the same cleaned mesh.
+void compare_imported_remesh(const Imported& im) {
+  const Mesh& raw = im.grid_mesh;
+  const int target = static_cast<int>(raw.positions.size());
+  if (target < 4) return;
+  const bool scan = remeshing::looks_like_scan(raw);
+  const Mesh in =
+      scan ? remeshing::prepare_input(raw, remeshing::scan_prepare_options(raw, target)) : raw;
+  std::printf("\nimported grid mesh remeshed to its own count (%s):\n\n",
+              scan ? "looks like a scan: clean-up first" : "no clean-up");
+  print_header();
+  compare_remeshers(in, target);
 }
 
 // ---- curvature of the imported grid vs PCL ----
@@ -359,10 +376,11 @@ void bench_file(const fs::path& path, bool cloud) {
     const Mesh m = read_mesh(path);
     std::printf("%zu vertices, %zu triangles\n\n", m.positions.size(), m.triangles.size());
     print_header();
-    compare_remeshers(m);
+    compare_remeshers(m, static_cast<int>(m.positions.size()));
   }
   const Imported im = import_and_mesh(path, cloud);
   compare_curvature(im.result.grid);
+  compare_imported_remesh(im);
 }
 
 bool wanted(const std::vector<std::string>& picks, const std::string& name) {
