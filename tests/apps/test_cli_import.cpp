@@ -63,6 +63,34 @@ TEST_F(CliImport, ImportsCloudsAndMeshesOfTheCorpusWithAReport) {
   }
 }
 
+TEST_F(CliImport, GridMeshNotesADepthJumpBoundOfHundredsOfRows) {
+  // lion-head is 0.7 units across: its grid's rows are 0.0148 apart, so the default bound of
+  // 8 (mm) is ~540 rows and no quad is a depth jump. grid-mesh says so and names 8 rows.
+  ASSERT_EQ(run("import " + (kCorpus / "meshes/lion-head.off").string() + " --out " +
+                path("g.smg").string())
+                .exit_code,
+            0);
+  const RangeGrid g = read_grid(path("g.smg"));
+  const auto plain = run("grid-mesh " + path("g.smg").string() + " --out " + path("m.ply").string());
+  ASSERT_EQ(plain.exit_code, 0) << plain.output;
+  EXPECT_NE(plain.output.find("note: --max-jump 8 is"), std::string::npos) << plain.output;
+  EXPECT_NE(plain.output.find("0 at depth jumps"), std::string::npos) << plain.output;
+  const auto json = run("grid-mesh " + path("g.smg").string() + " --out " +
+                        path("m.ply").string() + " --json");
+  ASSERT_EQ(json.exit_code, 0);
+  EXPECT_NEAR(nlohmann::json::parse(json.output)["depth_jump_bound_rows"].get<double>(),
+              8.0 / g.dh(), 1e-6 * 8.0 / g.dh());
+  std::ostringstream eight_rows;
+  eight_rows << 8 * g.dh();
+  const std::string scaled = "grid-mesh " + path("g.smg").string() + " --out " +
+                             path("m.ply").string() + " --max-jump " + eight_rows.str();
+  const auto text = run(scaled);
+  ASSERT_EQ(text.exit_code, 0) << text.output;
+  EXPECT_EQ(text.output.find("note:"), std::string::npos) << text.output;
+  const auto j = nlohmann::json::parse(run(scaled + " --json").output);
+  EXPECT_GT(j["quads_skipped_for_depth_jumps"].get<int>(), 0);
+}
+
 TEST_F(CliImport, BadFilesOfEveryFormatExit4NamingTheFileAndWriteNothing) {
   const std::pair<const char*, std::string> bad[] = {
       {"empty.ply", ""},
