@@ -58,13 +58,13 @@ struct RemeshArgs {
 remeshing::PrepareOptions choose_prepare(const Mesh& raw, const RemeshArgs& a) {
   using namespace remeshing;
   PrepareOptions po;
-  const ScanSigns signs = scan_signs(raw);
-  const bool scan = looks_like_scan(signs);
+  const TopologyStats ts = topology_stats(raw);
+  const bool scan = looks_like_scan(ts);
   if (!a.no_prepare && (a.force_prepare || scan)) {
     po = scan_prepare_options(raw, a.vertices);
     say() << "prepare: " << (scan ? "the input looks like a scan" : "asked for") << " ("
-          << signs.boundary_loops << " boundary loops, " << signs.components << " components, "
-          << signs.border_ears << " border ears): scan clean-up at the output's edge length "
+          << ts.boundary_loops << " boundary loops, " << ts.components << " components, "
+          << ts.border_ears << " border ears): scan clean-up at the output's edge length "
           << po.tip_reach_mm << " mm (--no-prepare to skip)\n";
   }
   if (a.min_component) po.min_component_faces = *a.min_component;

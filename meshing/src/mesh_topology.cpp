@@ -82,10 +82,15 @@ TopologyStats topology_stats(const Mesh& mesh) {
       use.forward += a < b;
     }
   std::vector<std::pair<int, int>> boundary;  // as half-edges, in face orientation
-  for (const auto& t : mesh.triangles)
+  for (const auto& t : mesh.triangles) {
+    int border_sides = 0;
     for (int k = 0; k < 3; ++k)
-      if (edges[edge_key(t[k], t[(k + 1) % 3])].faces == 1)
+      if (edges[edge_key(t[k], t[(k + 1) % 3])].faces == 1) {
         boundary.emplace_back(t[k], t[(k + 1) % 3]);
+        ++border_sides;
+      }
+    stats.border_ears += border_sides >= 2;
+  }
   for (const auto& [key, use] : edges) {
     if (use.faces == 1) ++stats.boundary_edges;
     if (use.faces == 2) {

@@ -536,31 +536,12 @@ double uniform_edge_length(const Mesh& mesh, int vertices) {
   return std::sqrt(area / (std::sqrt(3.0) / 2 * std::max(vertices, 1)));
 }
 
-ScanSigns scan_signs(const Mesh& mesh) {
-  const TopologyStats ts = topology_stats(mesh);
-  ScanSigns signs{ts.boundary_loops, ts.components, 0};
-  std::unordered_map<std::uint64_t, int> faces_at_edge;
-  faces_at_edge.reserve(3 * mesh.triangles.size());
-  auto key = [](int a, int b) {
-    return (static_cast<std::uint64_t>(std::min(a, b)) << 32) |
-           static_cast<std::uint32_t>(std::max(a, b));
-  };
-  for (const auto& t : mesh.triangles)
-    for (int i = 0; i < 3; ++i) ++faces_at_edge[key(t[i], t[(i + 1) % 3])];
-  for (const auto& t : mesh.triangles) {
-    int border = 0;
-    for (int i = 0; i < 3; ++i) border += faces_at_edge[key(t[i], t[(i + 1) % 3])] == 1;
-    signs.border_ears += border >= 2;
-  }
-  return signs;
+bool looks_like_scan(const TopologyStats& ts) {
+  return ts.boundary_loops > kScanLoops || ts.components > kScanComponents ||
+         ts.border_ears > kScanEars;
 }
 
-bool looks_like_scan(const ScanSigns& signs) {
-  return signs.boundary_loops > kScanLoops || signs.components > kScanComponents ||
-         signs.border_ears > kScanEars;
-}
-
-bool looks_like_scan(const Mesh& mesh) { return looks_like_scan(scan_signs(mesh)); }
+bool looks_like_scan(const Mesh& mesh) { return looks_like_scan(topology_stats(mesh)); }
 
 PrepareOptions scan_prepare_options(const Mesh& mesh, int target_vertices) {
   const double edge = uniform_edge_length(mesh, target_vertices);

@@ -759,7 +759,7 @@ TEST(Prepare, RaggedGridBorderLooksLikeAScan) {
   // and still a scan's border. The whole sheet has two ears (its corners cut by a diagonal).
   const Mesh sheet = sheet_with_holes(20, 10, [](int, int) { return false; });
   const Mesh ragged = sheet_with_holes(20, 10, [](int i, int j) { return j == 9 && i % 2 == 1; });
-  const ScanSigns plain = scan_signs(sheet), steps = scan_signs(ragged);
+  const TopologyStats plain = topology_stats(sheet), steps = topology_stats(ragged);
   EXPECT_EQ(plain.border_ears, 2u);
   EXPECT_FALSE(looks_like_scan(sheet));
   EXPECT_EQ(steps.boundary_loops, 1u);

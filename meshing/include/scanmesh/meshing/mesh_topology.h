@@ -16,6 +16,7 @@ struct TopologyStats {
   std::size_t inconsistent_edges = 0;  //!< two faces traversing the edge in the same direction
   std::size_t boundary_loops = 0;
   std::vector<std::size_t> boundary_loop_lengths;  //!< in edges, longest first
+  std::size_t border_ears = 0;  //!< faces with two or three boundary edges
   std::size_t unreferenced_vertices = 0;
   long long euler_characteristic = 0;  //!< V - E + F over referenced vertices
   std::size_t components = 0;          //!< groups of faces joined through shared vertices

@@ -124,12 +124,8 @@ double uniform_edge_length(const Mesh& mesh, int vertices);
 //! steps from row to row (16-510 on imported grid meshes of the corpus with two to nine loops;
 //! 0 or 1 on the corpus meshes themselves).
 inline constexpr std::size_t kScanLoops = 8, kScanComponents = 8, kScanEars = 8;
-struct ScanSigns {
-  std::size_t boundary_loops = 0, components = 0, border_ears = 0;
-};
-ScanSigns scan_signs(const Mesh& mesh);
-bool looks_like_scan(const ScanSigns& signs);
-bool looks_like_scan(const Mesh& mesh);  //!< looks_like_scan(scan_signs(mesh))
+bool looks_like_scan(const Mesh& mesh);
+bool looks_like_scan(const TopologyStats& stats);  //!< the same from the mesh's statistics
 
 //! The clean-up for a scan remeshed to `target_vertices`, at the output's scale L
 //! (uniform_edge_length): components under 10 L^2 (about a dozen output vertices) dropped, holes
