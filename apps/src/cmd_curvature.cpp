@@ -4,6 +4,7 @@
 #include <cmath>
 #include <iomanip>
 #include <iostream>
+#include <memory>
 #include <sstream>
 
 #include "cli_support.h"
@@ -19,6 +20,13 @@
 namespace scanmesh::cli {
 
 namespace {
+
+struct CurvatureArgs {
+  std::string grid;
+  std::string out;                      //!< output directory
+  std::string method = "grid-quadric";  //!< analytic | grid-quadric | quadric | seed
+  double radius_mm = 0;                 //!< quadric neighbourhood radius; <= 0: the default
+};
 
 // Percentiles of one per-cell quantity over the defined cells.
 template <typename F>
@@ -41,8 +49,6 @@ bool has_normals(const SurfaceFields& f) {
     if (f.defined[k] && !f.normal[k].isZero()) return true;
   return false;
 }
-
-}  // namespace
 
 int run_curvature(const CurvatureArgs& args) {
   Stopwatch total;
@@ -127,6 +133,26 @@ int run_curvature(const CurvatureArgs& args) {
   result() = report;
   result()["out"] = dir.string();
   return 0;
+}
+
+}  // namespace
+
+void register_curvature_commands(CLI::App& app, CommandList& commands) {
+  auto curv = std::make_shared<CurvatureArgs>();
+  auto* c = app.add_subcommand(
+      "curvature", "Normals and curvature of a grid: fields file, pictures and curvature.json");
+  c->add_option("grid", curv->grid, "Grid file (.smg)")->required();
+  c->add_option("-o,--out", curv->out, "Output folder")->required();
+  c->add_option("--method", curv->method,
+                "analytic, grid-quadric, quadric or seed (the legacy 7 x 7, 12-direction "
+                "maximum-curvature operator; k1 only)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"analytic", "grid-quadric", "quadric", "seed", "seed000"}));
+  c->add_option("--radius", curv->radius_mm,
+                "Neighbourhood radius of the quadric fit (mm; 0: default)")
+      ->capture_default_str()
+      ->check(in_range(0, 1e4));
+  commands.push_back({c, [curv] { return run_curvature(*curv); }});
 }
 
 }  // namespace scanmesh::cli

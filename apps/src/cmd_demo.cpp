@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iostream>
+#include <memory>
 #include <numbers>
 
 #include "cli_support.h"
@@ -138,6 +139,8 @@ GridProducts write_grid_products(const std::filesystem::path& out, const RangeGr
   return p;
 }
 
+namespace {
+
 int run_demo(const DemoArgs& args) {
   if (args.device.enabled) return run_device_demo(args);
   const std::filesystem::path out(args.out);
@@ -196,6 +199,24 @@ int run_demo(const DemoArgs& args) {
   result()["out"] = out.string();
   folder.keep();
   return 0;
+}
+
+}  // namespace
+
+void register_demo_commands(CLI::App& app, CommandList& commands) {
+  auto demo = std::make_shared<DemoArgs>();
+  auto* c =
+      app.add_subcommand("demo", "Simulated head scan -> clean grid -> mesh, pictures and report");
+  c->add_option("-o,--out", demo->out, "Output folder")->capture_default_str();
+  c->add_option("--scene", demo->scene, "Scene YAML (default: built-in head)")
+      ->check(CLI::ExistingFile);
+  c->add_option("--scanner", demo->scanner, "Scanner YAML (default: built-in head scanner)")
+      ->check(CLI::ExistingFile);
+  c->add_option("--seed", demo->seed, "Random seed of all defects")->check(seed_range());
+  add_cleaning_options(*c, demo->cleaning);
+  add_mesh_options(*c, demo->meshing);
+  add_device_demo_options(*c, demo->device);
+  commands.push_back({c, [demo] { return run_demo(*demo); }});
 }
 
 }  // namespace scanmesh::cli

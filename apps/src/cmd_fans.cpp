@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -20,6 +21,22 @@
 namespace scanmesh::cli {
 
 namespace {
+
+struct FansArgs {
+  std::string cloud;  //!< .ply, .pcd, .xyz/.txt/.pts or .smg (valid cells)
+  std::string out;
+  std::string render_png, histogram_png;
+  std::string report;  //!< JSON: stage statistics and the checker's verdicts
+  bool check = false;  //!< print the checker report of the result
+  FanOptions options;
+};
+
+struct CheckArgs {
+  std::string mesh;
+  std::string histogram_png;
+  bool skip_intersections = false;
+  std::string require;  //!< comma-separated MeshProperty names that decide the exit code
+};
 
 // The checker's report with one verdict per property (null where it was not tested): the
 // "check" block of the fans report and what `check --json` prints.
@@ -92,8 +109,6 @@ nlohmann::json fans_report_json(const std::string& input, const PointCloud& clou
   return j;
 }
 
-}  // namespace
-
 int run_fans(const FansArgs& args) {
   args.options.validate();
   const PointCloud cloud = read_point_cloud(args.cloud);
@@ -149,11 +164,11 @@ int run_check(const CheckArgs& args) {
   std::vector<MeshProperty> required;
   if (!args.require.empty()) required = parse_mesh_properties(args.require);
   const bool wants_intersections =
-      std::find(required.begin(), required.end(), MeshProperty::IntersectionFree) !=
-      required.end();
+      std::find(required.begin(), required.end(), MeshProperty::IntersectionFree) != required.end();
   if (wants_intersections && args.skip_intersections)
-    throw InvalidInputError("--require intersection-free needs the self-intersection test, "
-                            "which --no-intersections skips");
+    throw InvalidInputError(
+        "--require intersection-free needs the self-intersection test, "
+        "which --no-intersections skips");
   const Mesh mesh = read_mesh(args.mesh);
   const MeshCheckReport report = check_mesh(mesh, {.self_intersections = !args.skip_intersections});
   say() << args.mesh << "\n" << report.to_text();
@@ -171,6 +186,69 @@ int run_check(const CheckArgs& args) {
               << (v.evidence.empty() ? "" : ": " + v.evidence) << "\n";
   }
   return all_hold ? kSuccess : kRequirementNotMet;
+}
+
+}  // namespace
+
+void register_fans_commands(CLI::App& app, CommandList& commands) {
+  auto fans = std::make_shared<FansArgs>();
+  auto* fans_cmd = app.add_subcommand(
+      "fans",
+      "Mesh an unorganised point cloud: a triangle fan around every point, assembled "
+      "into one manifold mesh");
+  fans_cmd->add_option("cloud", fans->cloud, "Point cloud (.ply, .pcd, .xyz/.txt/.pts, .smg)")
+      ->required();
+  fans_cmd->add_option("-o,--out", fans->out, "Output mesh (.ply)")->required();
+  fans_cmd->add_option("--alpha", fans->options.alpha_deg, "Completeness angle (deg)")
+      ->capture_default_str()
+      ->check(in_range(30, 179.9));
+  fans_cmd->add_option("--dmax", fans->options.dmax_factor, "Largest search radius (x cell edge)")
+      ->capture_default_str()
+      ->check(above(0, 100));
+  fans_cmd->add_option("--k", fans->options.k, "Expected points per grid cell")
+      ->capture_default_str()
+      ->check(in_range(1, 1000));
+  fans_cmd->add_option("--max-edge", fans->options.max_edge, "Longest edge (input units; 0: off)")
+      ->capture_default_str()
+      ->check(in_range(0, 1e9));
+  fans_cmd
+      ->add_option("--max-edge-factor", fans->options.max_edge_factor,
+                   "Longest edge as a multiple of the local spacing (0: off)")
+      ->capture_default_str()
+      ->check(in_range(0, 1e6));
+  fans_cmd
+      ->add_option("--max-normal-angle", fans->options.max_normal_angle_deg,
+                   "Largest angle between neighbouring normals (deg; 0: off)")
+      ->capture_default_str()
+      ->check(in_range(0, 180));
+  fans_cmd
+      ->add_option("--max-hole", fans->options.max_hole_edges,
+                   "Close holes left between fans up to this many edges (0: off)")
+      ->capture_default_str()
+      ->check(in_range(0, 1e6));
+  fans_cmd->add_flag("--pca-normals", fans->options.pca_normals, "PCA normals for every point");
+  fans_cmd->add_option("--threads", fans->options.threads, "Threads (0: all)")
+      ->capture_default_str()
+      ->check(in_range(0, FanOptions::kMaxThreads));
+  fans_cmd->add_option("--render", fans->render_png, "Shaded picture of the mesh (PNG)");
+  fans_cmd->add_option("--histogram", fans->histogram_png, "Min-angle histogram (PNG)");
+  fans_cmd->add_option("--report", fans->report,
+                       "JSON report: stage statistics, topology and the checker's verdicts");
+  fans_cmd->add_flag("--check", fans->check, "Print the mesh checker's report");
+  commands.push_back({fans_cmd, [fans] { return run_fans(*fans); }});
+
+  auto check = std::make_shared<CheckArgs>();
+  auto* check_cmd = app.add_subcommand(
+      "check", "Mesh checker: duplicates, non-manifold edges/vertices, self-intersections, holes");
+  check_cmd->add_option("mesh", check->mesh, "Mesh (.ply, .off, .obj, .stl)")->required();
+  check_cmd->add_option("--histogram", check->histogram_png, "Min-angle histogram (PNG)");
+  check_cmd->add_flag("--no-intersections", check->skip_intersections,
+                      "Skip the self-intersection test");
+  check_cmd->add_option("--require", check->require,
+                        "Comma-separated properties that set the exit code (10 when one fails): "
+                        "non-empty, closed, edge-manifold, vertex-manifold, oriented, "
+                        "intersection-free, no-degenerate, no-duplicates");
+  commands.push_back({check_cmd, [check] { return run_check(*check); }});
 }
 
 }  // namespace scanmesh::cli

@@ -1,6 +1,7 @@
 // Subcommands that produce or inspect range grids: sim, info, export, clean.
 #include <algorithm>
 #include <cctype>
+#include <memory>
 #include <utility>
 
 #include "cli_support.h"
@@ -13,6 +14,32 @@
 #include "scanmesh/core/mesh_io.h"
 
 namespace scanmesh::cli {
+
+namespace {
+
+struct SimArgs {
+  std::string scene;    //!< empty: built-in head
+  std::string scanner;  //!< empty: built-in head scanner
+  std::optional<std::uint64_t> seed;
+  std::optional<double> noise_sigma_mm;
+  std::string out;
+};
+
+struct InfoArgs {
+  std::string file;
+};
+
+struct ExportArgs {
+  std::string grid;
+  std::string pcd, ply, texture, depth;
+};
+
+struct CleanArgs {
+  std::string grid;
+  std::string out;
+  CleaningOptions options;
+  int fill_holes = 0;  //!< fill interior holes of at most this many cells (0: off)
+};
 
 int run_sim(const SimArgs& args) {
   const sim::Scene scene = load_scene(args.scene);
@@ -27,8 +54,6 @@ int run_sim(const SimArgs& args) {
   result() = {{"out", args.out}, {"grid", grid_summary(scan.grid)}};
   return 0;
 }
-
-namespace {
 
 nlohmann::json describe(const std::filesystem::path& file) {
   if (looks_like_grid_file(file) || file.extension() == ".smg") {
@@ -61,8 +86,6 @@ void print_text(const nlohmann::json& j, const std::string& indent = "") {
     }
   }
 }
-
-}  // namespace
 
 int run_info(const InfoArgs& args) {
   result() = describe(args.file);
@@ -114,6 +137,69 @@ int run_clean(const CleanArgs& args) {
               {"cells_filled", filled.cells},
               {"valid_cells", grid.valid_count()}};
   return 0;
+}
+
+}  // namespace
+
+void add_cleaning_options(CLI::App& command, CleaningOptions& options) {
+  command
+      .add_option("--spike-mm", options.spike_threshold_mm,
+                  "Spike threshold above the neighbour median (mm)")
+      ->capture_default_str()
+      ->check(in_range(0, 1e4));
+  command
+      .add_option("--spike-spread", options.spike_spread_factor,
+                  "Extra threshold in units of the prediction spread")
+      ->capture_default_str()
+      ->check(in_range(0, 1e3));
+  command
+      .add_option("--min-fragment", options.min_component_cells,
+                  "Pieces with fewer cells are removed")
+      ->capture_default_str()
+      ->check(in_range(1, 1e8));
+}
+
+void register_grid_commands(CLI::App& app, CommandList& commands) {
+  auto sim = std::make_shared<SimArgs>();
+  auto* sim_cmd =
+      app.add_subcommand("sim", "Simulate a cylindrical range scan: scene + scanner -> grid file");
+  sim_cmd->add_option("--scene", sim->scene, "Scene YAML (default: built-in head)")
+      ->check(CLI::ExistingFile);
+  sim_cmd->add_option("--scanner", sim->scanner, "Scanner YAML (default: built-in head scanner)")
+      ->check(CLI::ExistingFile);
+  sim_cmd->add_option("--seed", sim->seed, "Random seed of all defects")->check(seed_range());
+  sim_cmd->add_option("--noise", sim->noise_sigma_mm, "Range noise sigma (mm)")
+      ->check(in_range(0, 1e3));
+  sim_cmd->add_option("-o,--out", sim->out, "Output grid file (.smg)")->required();
+  commands.push_back({sim_cmd, [sim] { return run_sim(*sim); }});
+
+  auto info = std::make_shared<InfoArgs>();
+  auto* info_cmd =
+      app.add_subcommand("info", "Describe a grid (.smg) or mesh (.ply .off .obj .stl) file");
+  info_cmd->add_option("file", info->file, "Grid or mesh file")->required();
+  commands.push_back({info_cmd, [info] { return run_info(*info); }});
+
+  auto exp = std::make_shared<ExportArgs>();
+  auto* export_cmd =
+      app.add_subcommand("export", "Export a grid to PCD / PLY points / texture and depth PNG");
+  export_cmd->add_option("grid", exp->grid, "Grid file (.smg)")->required();
+  export_cmd->add_option("--pcd", exp->pcd, "Organised PCD point cloud");
+  export_cmd->add_option("--ply", exp->ply, "PLY point cloud of the valid cells");
+  export_cmd->add_option("--texture", exp->texture, "Texture PNG (pixel x, y = phi, h index)");
+  export_cmd->add_option("--depth", exp->depth, "Depth picture PNG");
+  commands.push_back({export_cmd, [exp] { return run_export(*exp); }});
+
+  auto clean = std::make_shared<CleanArgs>();
+  auto* clean_cmd = app.add_subcommand("clean", "Remove spikes and isolated fragments from a grid");
+  clean_cmd->add_option("grid", clean->grid, "Grid file (.smg)")->required();
+  clean_cmd->add_option("-o,--out", clean->out, "Cleaned grid file (.smg)")->required();
+  add_cleaning_options(*clean_cmd, clean->options);
+  clean_cmd
+      ->add_option("--fill-holes", clean->fill_holes,
+                   "Afterwards fill interior holes of at most this many cells (0: off)")
+      ->check(in_range(0, 1e8))
+      ->default_val(0);
+  commands.push_back({clean_cmd, [clean] { return run_clean(*clean); }});
 }
 
 }  // namespace scanmesh::cli

@@ -3,6 +3,7 @@
 // surface (docs/particles.md, docs/cli.md).
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -22,6 +23,18 @@
 namespace scanmesh::cli {
 
 namespace {
+
+struct ParticlesArgs {
+  std::string scene;  //!< static scene or animated skeleton YAML
+  std::string grid;   //!< scan mode: grid file
+  double edge = 0.0;  //!< R
+  bool adaptive = false;
+  int frames = 10;
+  int steps_per_frame = 20;
+  bool no_flips = false;
+  std::uint64_t seed = 1;
+  std::string out;
+};
 
 using Eigen::Vector3d;
 
@@ -76,8 +89,6 @@ nlohmann::json mesh_json(const Mesh& m) {
           {"nonmanifold_edges", s.nonmanifold_edges},
           {"euler_characteristic", s.euler_characteristic}};
 }
-
-}  // namespace
 
 int run_particles(const ParticlesArgs& args) {
   if (args.scene.empty() == args.grid.empty())
@@ -175,6 +186,36 @@ int run_particles(const ParticlesArgs& args) {
   result()["out"] = out.string();
   folder.keep();
   return 0;
+}
+
+}  // namespace
+
+void register_particles_commands(CLI::App& app, CommandList& commands) {
+  auto particles = std::make_shared<ParticlesArgs>();
+  auto* c = app.add_subcommand(
+      "particles",
+      "Mesh an implicit scene, an animated one or a scan's surface with a particle "
+      "spring network");
+  c->add_option("scene", particles->scene, "Scene YAML (static or with keyframes)")
+      ->check(CLI::ExistingFile);
+  c->add_option("--grid", particles->grid, "Mesh a scan's continuous surface (.smg)")
+      ->check(CLI::ExistingFile);
+  c->add_option("--edge", particles->edge, "Target edge length R (mm)")
+      ->required()
+      ->check(above(0, 1e6));
+  c->add_flag("--adaptive", particles->adaptive, "Curvature-adaptive rest lengths");
+  c->add_option("--frames", particles->frames, "Frames of an animated scene")
+      ->capture_default_str()
+      ->check(in_range(1, 100000));
+  c->add_option("--steps", particles->steps_per_frame, "Iterations per frame")
+      ->capture_default_str()
+      ->check(in_range(1, 100000));
+  c->add_flag("--no-flips", particles->no_flips, "Disable edge flips to valence 6");
+  c->add_option("--seed", particles->seed, "Random seed")
+      ->capture_default_str()
+      ->check(seed_range());
+  c->add_option("-o,--out", particles->out, "Output folder")->required();
+  commands.push_back({c, [particles] { return run_particles(*particles); }});
 }
 
 }  // namespace scanmesh::cli

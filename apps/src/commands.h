@@ -1,5 +1,5 @@
-// The scanmesh subcommands. Each takes its parsed arguments and returns an exit code; errors
-// are thrown as scanmesh's typed exceptions and mapped in main().
+// The scanmesh subcommands. Each runs on its parsed arguments and returns an exit code; errors
+// are thrown as scanmesh's typed exceptions and mapped to exit codes by run_guarded().
 #pragma once
 
 #include <cstdint>
@@ -17,69 +17,39 @@ class App;
 
 namespace scanmesh::cli {
 
-// A subcommand registered by a stage's cmd_<stage>.cpp: the parsed CLI11 subcommand and what
-// runs it. A stage adds `void register_<stage>_commands(CLI::App&, CommandList&)` below and one
-// call in main.cpp; its argument structs live in the closure (e.g. a shared_ptr).
+// Every subcommand is registered the same way: its stage's cmd_<stage>.cpp defines
+// `void register_<stage>_commands(CLI::App&, CommandList&)`, which adds the subcommands with
+// their options bound to an argument struct held by the closure (a shared_ptr), and main.cpp
+// calls the registrations in the order `scanmesh --help` lists them.
 struct RegisteredCommand {
   CLI::App* command = nullptr;
   std::function<int()> run;
 };
 using CommandList = std::vector<RegisteredCommand>;
 
-struct SimArgs {
-  std::string scene;    //!< empty: built-in head
-  std::string scanner;  //!< empty: built-in head scanner
-  std::optional<std::uint64_t> seed;
-  std::optional<double> noise_sigma_mm;
-  std::string out;
-};
-int run_sim(const SimArgs& args);
+// --- range grids: sim, info, export, clean: apps/src/cmd_grid.cpp ---
+void register_grid_commands(CLI::App& app, CommandList& commands);
+//! --spike-mm, --spike-spread, --min-fragment (clean, demo).
+void add_cleaning_options(CLI::App& command, CleaningOptions& options);
 
-struct InfoArgs {
-  std::string file;
-};
-int run_info(const InfoArgs& args);
+// --- meshes of grids and pictures of meshes: grid-mesh, render: apps/src/cmd_mesh.cpp ---
+void register_mesh_commands(CLI::App& app, CommandList& commands);
+//! --max-jump, --open-seam (grid-mesh, demo).
+void add_mesh_options(CLI::App& command, GridMeshOptions& options);
 
-struct ExportArgs {
-  std::string grid;
-  std::string pcd, ply, texture, depth;
-};
-int run_export(const ExportArgs& args);
+// --- normals and curvature of a grid: apps/src/cmd_curvature.cpp ---
+void register_curvature_commands(CLI::App& app, CommandList& commands);
 
-struct CleanArgs {
-  std::string grid;
-  std::string out;
-  CleaningOptions options;
-  int fill_holes = 0;  //!< fill interior holes of at most this many cells (0: off)
-};
-int run_clean(const CleanArgs& args);
+// --- point-cloud fans and the mesh checker: fans, check: apps/src/cmd_fans.cpp ---
+void register_fans_commands(CLI::App& app, CommandList& commands);
 
-struct GridMeshArgs {
-  std::string grid;
-  std::string out_ply, out_obj, out_stl, render_png;
-  GridMeshOptions options;
-};
-int run_grid_mesh(const GridMeshArgs& args);
+// --- particle spring networks: apps/src/cmd_particles.cpp ---
+void register_particles_commands(CLI::App& app, CommandList& commands);
 
-struct RenderArgs {
-  std::string mesh;
-  std::string out;
-  int size = 640;
-  double azimuth_deg = 180.0, elevation_deg = 10.0;
-  bool wireframe = false;
-};
-int run_render(const RenderArgs& args);
+// --- the demo: apps/src/cmd_demo.cpp, its device path in apps/src/cmd_device_demo.cpp ---
+void register_demo_commands(CLI::App& app, CommandList& commands);
 
-struct CurvatureArgs {
-  std::string grid;
-  std::string out;                      //!< output directory
-  std::string method = "grid-quadric";  //!< analytic | grid-quadric | quadric | seed
-  double radius_mm = 0;                 //!< quadric neighbourhood radius; <= 0: the default
-};
-int run_curvature(const CurvatureArgs& args);
-
-//! `demo --device-sim`: the device path instead of the direct range simulator
-//! (apps/src/cmd_device_demo.cpp).
+//! `demo --device-sim`: the device path instead of the direct range simulator.
 struct DeviceDemoArgs {
   bool enabled = false;
   int steps = 90;
@@ -97,48 +67,9 @@ struct DemoArgs {
   CleaningOptions cleaning;
   GridMeshOptions meshing;
 };
-int run_demo(const DemoArgs& args);
 //! Adds --device-sim and its options to the demo subcommand.
 void add_device_demo_options(CLI::App& demo, DeviceDemoArgs& args);
 int run_device_demo(const DemoArgs& args);
-
-}  // namespace scanmesh::cli
-
-// --- point-cloud fans (seed 002) and the mesh checker: apps/src/cmd_fans.cpp ---
-#include "scanmesh/meshing/fans/fans.h"
-
-namespace scanmesh::cli {
-
-struct FansArgs {
-  std::string cloud;  //!< .ply, .pcd, .xyz/.txt/.pts or .smg (valid cells)
-  std::string out;
-  std::string render_png, histogram_png;
-  std::string report;  //!< JSON: stage statistics and the checker's verdicts
-  bool check = false;  //!< print the checker report of the result
-  FanOptions options;
-};
-int run_fans(const FansArgs& args);
-
-struct CheckArgs {
-  std::string mesh;
-  std::string histogram_png;
-  bool skip_intersections = false;
-  std::string require;  //!< comma-separated MeshProperty names that decide the exit code
-};
-int run_check(const CheckArgs& args);
-
-struct ParticlesArgs {
-  std::string scene;  //!< static scene or animated skeleton YAML
-  std::string grid;   //!< scan mode: grid file
-  double edge = 0.0;  //!< R
-  bool adaptive = false;
-  int frames = 10;
-  int steps_per_frame = 20;
-  bool no_flips = false;
-  std::uint64_t seed = 1;
-  std::string out;
-};
-int run_particles(const ParticlesArgs& args);
 
 }  // namespace scanmesh::cli
 
@@ -183,12 +114,12 @@ void register_measure_commands(CLI::App& app, CommandList& commands);
 void register_import_commands(CLI::App& app, CommandList& commands);
 }  // namespace scanmesh::cli
 
-// --- animation meshes (seed 000): apps/src/cmd_aft.cpp ---
+// --- animation meshes: regions, animesh: apps/src/cmd_aft.cpp ---
 namespace scanmesh::cli {
 void register_aft_commands(CLI::App& app, CommandList& commands);
 }  // namespace scanmesh::cli
 
-// --- seed 001 adaptive remeshing: apps/src/cmd_remesh.cpp ---
+// --- adaptive remeshing: apps/src/cmd_remesh.cpp ---
 namespace scanmesh::cli {
 void register_remesh_commands(CLI::App& app, CommandList& commands);
 }  // namespace scanmesh::cli
