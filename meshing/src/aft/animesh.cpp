@@ -525,108 +525,179 @@ std::size_t crossings_within(const std::vector<std::array<int, 3>>& tris,
   return count_intersecting_faces(mesh);
 }
 
-}  // namespace
+using Clock = std::chrono::steady_clock;
 
-AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
-                                   const ScanSurface& surface, const RegionSettings& settings) {
-  using Clock = std::chrono::steady_clock;
-  const auto seconds_since = [](Clock::time_point t0) {
-    return std::chrono::duration<double>(Clock::now() - t0).count();
-  };
-  check_triangle_budget(g, surface);
-  auto stage_start = Clock::now();
-  AnimationMesh am;
-  const SegmentNodes seg = initialise_segments(g, lines, surface, settings);
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// The segment nodes lifted onto the surface: the first entries of every region's store and of
+// the stitched one.
+detail::NodeStore segment_node_store(const SegmentNodes& seg, const ScanSurface& surface) {
   detail::NodeStore store;
   for (std::size_t i = 0; i < seg.params.size(); ++i)
     if (store.add(seg.params[i], surface) < 0)
       throw InvalidInputError("segment node " + std::to_string(i) + " is off the scan surface");
-  const std::size_t boundary_nodes = store.params.size();
-  am.seconds.segments = seconds_since(stage_start);
-  stage_start = Clock::now();
-  // One job per meshed region. The regions share only the segment nodes (fixed, the first
-  // boundary_nodes entries of the store), so each is meshed on its own copy of them, in
-  // parallel; the Steiner points are then appended region by region in region order, which
-  // gives the same node numbering, and the same mesh, as meshing the regions one after another.
-  struct RegionJob {
-    int region;
-    detail::RegionMeshInput in;
-    detail::NodeStore nodes;
-    RegionMeshStats stats;
-    std::vector<std::array<int, 3>> tris;
-    int flips = 0, valence_flip_retries = 0;
-    detail::RepairStats repair;
-    // The region as the mesher left it, for the serial fallback (see below).
-    detail::NodeStore nodes_meshed;
-    std::vector<std::array<int, 3>> tris_meshed;
-    AnimationMesh::StageSeconds thread_seconds;
-  };
+  return store;
+}
+
+// One job per meshed region. The regions share only the segment nodes (fixed, the first
+// boundary_nodes entries of the store), so each is meshed on its own copy of them, in
+// parallel; the Steiner points are then appended region by region in region order, which
+// gives the same node numbering, and the same mesh, as meshing the regions one after another.
+struct RegionJob {
+  int region;
+  detail::RegionMeshInput in;
+  detail::NodeStore nodes;
+  RegionMeshStats stats;
+  std::vector<std::array<int, 3>> tris;
+  int flips = 0, valence_flip_retries = 0;
+  detail::RepairStats repair;
+  // The region as the mesher left it, for the serial fallback (postprocess_stitched_if_needed).
+  detail::NodeStore nodes_meshed;
+  std::vector<std::array<int, 3>> tris_meshed;
+  AnimationMesh::StageSeconds thread_seconds;
+};
+
+// The region as the polygon of its boundary nodes (the chords the front starts from, not
+// the curves: a chord cutting a curved opening's corner must not count as leaving).
+std::vector<Vector2d> boundary_polygon(const RegionGraph& g, const SegmentNodes& seg, int c) {
+  std::vector<Vector2d> poly;
+  for (const HalfEdgeRef& he : g.cycles[c].edges) {
+    std::vector<int> chain = seg.chains[he.segment];
+    if (!he.forward) std::reverse(chain.begin(), chain.end());
+    for (std::size_t k = 0; k + 1 < chain.size(); ++k) {
+      Vector2d p = seg.params[chain[k]];
+      if (!poly.empty()) p.x() = poly.back().x() + wrap_angle(p.x() - poly.back().x());
+      poly.push_back(p);
+    }
+  }
+  return poly;
+}
+
+// The chain edges of cycle c in the cycle's direction: where the region's front starts.
+void append_front_edges(const RegionGraph& g, const SegmentNodes& seg, int c,
+                        std::vector<std::array<int, 2>>& front) {
+  for (const HalfEdgeRef& he : g.cycles[c].edges) {
+    std::vector<int> chain = seg.chains[he.segment];
+    if (!he.forward) std::reverse(chain.begin(), chain.end());
+    for (std::size_t k = 0; k + 1 < chain.size(); ++k) front.push_back({chain[k], chain[k + 1]});
+  }
+}
+
+// The mesher's input for region r: its settings, its boundary polygons and its front.
+detail::RegionMeshInput region_mesh_input(const RegionGraph& g, const SegmentNodes& seg,
+                                          const RegionSettings& settings, std::size_t r) {
+  const Region& reg = g.regions[r];
+  detail::RegionMeshInput in;
+  in.unit_mm = reg.unit_mm > 0 ? reg.unit_mm : settings.default_unit_mm;
+  in.strategy = settings.strategy;
+  in.chordal_tolerance_mm = settings.chordal_tolerance_mm;
+  in.min_unit_mm = settings.min_unit_mm;
+  in.seed = settings.seed + 1000003ull * r;
+  in.max_steps = static_cast<std::size_t>(settings.max_front_steps);
+  std::vector<int> cycles{reg.outer};
+  cycles.insert(cycles.end(), reg.inner.begin(), reg.inner.end());
+  for (int c : cycles) in.polygons.push_back(boundary_polygon(g, seg, c));
+  for (int c : cycles) append_front_edges(g, seg, c, in.front);
+  return in;
+}
+
+// A job for every region that is not an opening, in region order.
+std::vector<RegionJob> region_jobs(const RegionGraph& g, const SegmentNodes& seg,
+                                   const RegionSettings& settings) {
   std::vector<RegionJob> jobs;
   for (std::size_t r = 0; r < g.regions.size(); ++r) {
-    const Region& reg = g.regions[r];
-    if (reg.opening) continue;
-    detail::RegionMeshInput in;
-    in.unit_mm = reg.unit_mm > 0 ? reg.unit_mm : settings.default_unit_mm;
-    in.strategy = settings.strategy;
-    in.chordal_tolerance_mm = settings.chordal_tolerance_mm;
-    in.min_unit_mm = settings.min_unit_mm;
-    in.seed = settings.seed + 1000003ull * r;
-    in.max_steps = static_cast<std::size_t>(settings.max_front_steps);
-    std::vector<int> cycles{reg.outer};
-    cycles.insert(cycles.end(), reg.inner.begin(), reg.inner.end());
-    // The region as the polygon of its boundary nodes (the chords the front starts from, not
-    // the curves: a chord cutting a curved opening's corner must not count as leaving).
-    for (int c : cycles) {
-      std::vector<Vector2d> poly;
-      for (const HalfEdgeRef& he : g.cycles[c].edges) {
-        std::vector<int> chain = seg.chains[he.segment];
-        if (!he.forward) std::reverse(chain.begin(), chain.end());
-        for (std::size_t k = 0; k + 1 < chain.size(); ++k) {
-          Vector2d p = seg.params[chain[k]];
-          if (!poly.empty()) p.x() = poly.back().x() + wrap_angle(p.x() - poly.back().x());
-          poly.push_back(p);
-        }
-      }
-      in.polygons.push_back(poly);
-    }
-    for (int c : cycles)
-      for (const HalfEdgeRef& he : g.cycles[c].edges) {
-        std::vector<int> chain = seg.chains[he.segment];
-        if (!he.forward) std::reverse(chain.begin(), chain.end());
-        for (std::size_t k = 0; k + 1 < chain.size(); ++k)
-          in.front.push_back({chain[k], chain[k + 1]});
-      }
-    jobs.push_back({static_cast<int>(r), std::move(in), {}, {}, {}, 0, {}, {}, {}, {}});
+    if (g.regions[r].opening) continue;
+    jobs.push_back({.region = static_cast<int>(r), .in = region_mesh_input(g, seg, settings, r)});
   }
-  // Constraint edges: every segment chain. Their ends are segment nodes, which have the same
-  // index in every region's store and in the stitched one.
+  return jobs;
+}
+
+// Constraint edges: every segment chain. Their ends are segment nodes, which have the same
+// index in every region's store and in the stitched one.
+std::unordered_set<std::uint64_t> segment_constraint_edges(const SegmentNodes& seg) {
   std::unordered_set<std::uint64_t> constraint;
   for (const auto& chain : seg.chains)
     for (std::size_t k = 0; k + 1 < chain.size(); ++k)
       constraint.insert(ukey(chain[k], chain[k + 1]));
-  // Largest fronts first, so that a big region does not start last.
+  return constraint;
+}
+
+// Largest fronts first, so that a big region does not start last.
+std::vector<int> largest_fronts_first(const std::vector<RegionJob>& jobs) {
   std::vector<int> order(jobs.size());
   for (std::size_t k = 0; k < jobs.size(); ++k) order[k] = static_cast<int>(k);
   std::stable_sort(order.begin(), order.end(),
                    [&](int x, int y) { return jobs[x].in.front.size() > jobs[y].in.front.size(); });
+  return order;
+}
+
+// The regions' triangles over one node store, each labelled with its region.
+struct StitchedMesh {
+  detail::NodeStore nodes;
+  std::vector<std::array<int, 3>> tris;
+  std::vector<int> labels;
+};
+
+// What a post-processing run (RegionMesher::postprocess) did, and its time per stage.
+struct PostResult {
+  int flips = 0;
+  int valence_flip_retries = 0;
+  detail::RepairStats repair;
+  AnimationMesh::StageSeconds seconds;
+};
+
+// What the regions' meshing, their post-processing and the stitching share: the segment nodes
+// and the constraint edges between them. (Called from the parallel jobs: const throughout.)
+struct RegionMesher {
+  const RegionGraph& g;
+  const ScanSurface& surface;
+  const RegionSettings& settings;
+  const detail::NodeStore& store;  // the segment nodes alone
+  std::size_t boundary_nodes;      // store's size: every store's segment nodes come first
+  const std::unordered_set<std::uint64_t>& constraint;
+
   // Small-angle repair (a little above 20 deg so that later rounding cannot drop below it).
-  const auto repair = [&](std::vector<std::array<int, 3>>& tris, std::vector<int>& labels,
-                          detail::NodeStore& nodes) {
+  detail::RepairStats repair(std::vector<std::array<int, 3>>& tris, std::vector<int>& labels,
+                             detail::NodeStore& nodes) const {
     return detail::repair_small_angles(tris, labels, nodes, surface, constraint, boundary_nodes,
                                        settings.repair_goal_deg * M_PI / 180, 20.0 * M_PI / 180,
                                        settings.repair_rounds, settings.deviation_goal_mm);
-  };
+  }
+
+  // The stages after the first max-min flips: the valence flips (if asked; their quad corners
+  // go to flipped_corners), the smoothing, the max-min flips again and the repair, timed into
+  // `out`. Returns the valence and the max-min flips.
+  std::pair<int, int> smooth_flip_and_repair(bool with_valence_flips,
+                                             std::vector<std::array<int, 3>>& tris,
+                                             std::vector<int>& labels, detail::NodeStore& nodes,
+                                             WallCrossingGuard& guard,
+                                             std::vector<char>& flipped_corners,
+                                             PostResult& out) const {
+    auto t1 = Clock::now();
+    flipped_corners.clear();
+    const int valence = with_valence_flips
+                            ? valence_flips(tris, nodes, surface, constraint, kValenceFlipFloor,
+                                            flipped_corners, guard)
+                            : 0;
+    smooth_steiner_points(tris, nodes, surface, boundary_nodes, settings.smooth_iterations, guard);
+    out.seconds.smoothing += seconds_since(t1);
+    t1 = Clock::now();
+    const int delaunay = delaunay_flips(tris, nodes.pos, nodes.normal, constraint, guard);
+    out.seconds.flips += seconds_since(t1);
+    t1 = Clock::now();
+    out.repair = repair(tris, labels, nodes);
+    out.seconds.repair += seconds_since(t1);
+    return std::pair{valence, delaunay};
+  }
+
   // Flips, tangential smoothing of the Steiner points (towards the neighbours' centroid, on the
   // surface, kept only if the smallest incident angle grows), flips again, and the small-angle
-  // repair: of one region in its job, or of the stitched mesh in the fallback below.
-  struct PostResult {
-    int flips = 0;
-    int valence_flip_retries = 0;
-    detail::RepairStats repair;
-    AnimationMesh::StageSeconds seconds;
-  };
-  const auto postprocess = [&](std::vector<std::array<int, 3>>& tris, std::vector<int>& labels,
-                               detail::NodeStore& nodes) {
+  // repair: of one region in its job, or of the stitched mesh in the fallback
+  // (postprocess_stitched_if_needed).
+  PostResult postprocess(std::vector<std::array<int, 3>>& tris, std::vector<int>& labels,
+                         detail::NodeStore& nodes) const {
     PostResult out;
     auto t0 = Clock::now();
     // One filing of the triangles for the wall tests of all the stages below (tris and nodes
@@ -644,25 +715,8 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
       nodes_flipped = nodes;
     }
     std::vector<char> flipped_corners;  // the valence flips' quad corners
-    const auto finish = [&](bool with_valence_flips) {
-      auto t1 = Clock::now();
-      flipped_corners.clear();
-      const int valence = with_valence_flips
-                              ? valence_flips(tris, nodes, surface, constraint, kValenceFlipFloor,
-                                              flipped_corners, guard)
-                              : 0;
-      smooth_steiner_points(tris, nodes, surface, boundary_nodes, settings.smooth_iterations,
-                            guard);
-      out.seconds.smoothing += seconds_since(t1);
-      t1 = Clock::now();
-      const int delaunay = delaunay_flips(tris, nodes.pos, nodes.normal, constraint, guard);
-      out.seconds.flips += seconds_since(t1);
-      t1 = Clock::now();
-      out.repair = repair(tris, labels, nodes);
-      out.seconds.repair += seconds_since(t1);
-      return std::pair{valence, delaunay};
-    };
-    auto [valence, later_flips] = finish(settings.valence_flips);
+    auto [valence, later_flips] = smooth_flip_and_repair(settings.valence_flips, tris, labels,
+                                                         nodes, guard, flipped_corners, out);
     // The valence flips' tests are local; where a thin part of the surface (an ear's rim) lies
     // close to the other side of itself, a flip there and the moves after it crossed triangles
     // of that other side (2 crossing pairs at half the sample units). So the triangles at the
@@ -675,21 +729,24 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
       labels = std::move(labels_flipped);
       nodes = std::move(nodes_flipped);
       guard.forget();
-      std::tie(valence, later_flips) = finish(false);
+      std::tie(valence, later_flips) =
+          smooth_flip_and_repair(false, tris, labels, nodes, guard, flipped_corners, out);
       ++out.valence_flip_retries;
     }
     later_flips += valence;
     out.flips += later_flips;
     return out;
-  };
+  }
+
   // Per region, none of these stages crosses a region border: flips never flip a constraint
   // edge (every border is one), and only Steiner points move, whose stars lie in their region.
   // The job's numbering is the stitched one shifted, so the smoothing's Gauss-Seidel order and
   // the flips' key order are kept. What a region does not see is the others' triangles: the
   // repair tests a changed triangle for crossings against its own region only, and a flip or
   // collapse cannot know that the edge it makes between two segment nodes exists in another
-  // region. Both are checked on the stitched mesh (below).
-  const auto postprocess_region = [&](RegionJob& job) {
+  // region. Both are checked on the stitched mesh (stitch_defects,
+  // postprocess_stitched_if_needed).
+  void postprocess_region(RegionJob& job) const {
     job.nodes_meshed = job.nodes;
     job.tris_meshed = job.tris;
     std::vector<int> labels(job.tris.size(), job.region);
@@ -700,9 +757,10 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
     job.thread_seconds.flips = r.seconds.flips;
     job.thread_seconds.smoothing = r.seconds.smoothing;
     job.thread_seconds.repair = r.seconds.repair;
-  };
+  }
+
   // One region meshed (and post-processed, unless that runs on the stitched mesh) from scratch.
-  const auto mesh_region = [&](RegionJob& job) {
+  void mesh_region(RegionJob& job) const {
     const auto job_start = Clock::now();
     job.nodes = store;
     job.stats = RegionMeshStats{};
@@ -721,101 +779,115 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
       job.nodes_meshed = job.nodes;
       job.tris_meshed = job.tris;
     }
-  };
+  }
+
+  // Stitching: the Steiner points appended region by region (as the mesher left each region,
+  // or as its job's post-processing did).
+  StitchedMesh stitch(const std::vector<RegionJob>& jobs, bool as_meshed) const {
+    StitchedMesh out;
+    out.nodes = store;
+    for (const RegionJob& job : jobs) {
+      const detail::NodeStore& jn = as_meshed ? job.nodes_meshed : job.nodes;
+      const int offset = static_cast<int>(out.nodes.pos.size() - boundary_nodes);
+      for (std::size_t v = boundary_nodes; v < jn.pos.size(); ++v) {
+        out.nodes.params.push_back(jn.params[v]);
+        out.nodes.pos.push_back(jn.pos[v]);
+        out.nodes.normal.push_back(jn.normal[v]);
+      }
+      for (auto t : as_meshed ? job.tris_meshed : job.tris) {
+        for (int& v : t)
+          if (v >= static_cast<int>(boundary_nodes)) v += offset;
+        out.tris.push_back(t);
+        out.labels.push_back(job.region);
+      }
+    }
+    return out;
+  }
+};
+
+// Every job meshed, largest fronts first, on all threads; the first failed job's (in job order)
+// exception is rethrown once all have run.
+void mesh_regions_in_parallel(std::vector<RegionJob>& jobs, const RegionMesher& mesher) {
+  const std::vector<int> order = largest_fronts_first(jobs);
   std::vector<std::exception_ptr> errors(jobs.size());
 #pragma omp parallel for schedule(dynamic, 1)
   for (std::size_t k = 0; k < order.size(); ++k) {
     RegionJob& job = jobs[order[k]];
     try {
-      mesh_region(job);
+      mesher.mesh_region(job);
     } catch (...) {
       errors[order[k]] = std::current_exception();
     }
   }
   for (const auto& e : errors)
     if (e) std::rethrow_exception(e);
-  // Stitching: the Steiner points appended region by region.
-  const auto stitch = [&](bool as_meshed, detail::NodeStore& nodes,
-                          std::vector<std::array<int, 3>>& tris, std::vector<int>& labels) {
-    nodes = store;
-    for (const RegionJob& job : jobs) {
-      const detail::NodeStore& jn = as_meshed ? job.nodes_meshed : job.nodes;
-      const int offset = static_cast<int>(nodes.pos.size() - boundary_nodes);
-      for (std::size_t v = boundary_nodes; v < jn.pos.size(); ++v) {
-        nodes.params.push_back(jn.params[v]);
-        nodes.pos.push_back(jn.pos[v]);
-        nodes.normal.push_back(jn.normal[v]);
-      }
-      for (auto t : as_meshed ? job.tris_meshed : job.tris) {
-        for (int& v : t)
-          if (v >= static_cast<int>(boundary_nodes)) v += offset;
-        tris.push_back(t);
-        labels.push_back(job.region);
-      }
-    }
+}
+
+// The job meshed again with the other front orders; the best attempt is kept, with the time
+// of every attempt.
+void remesh_with_other_front_orders(RegionJob& job, const RegionMesher& mesher) {
+  // An attempt is better with fewer unclosed front edges (a hole is worse than a crossing),
+  // then fewer crossings.
+  const auto badness = [&](const RegionJob& j) {
+    return std::pair{j.stats.unmeshed_front_edges, crossings_within(j.tris, j.nodes.pos)};
   };
-  detail::NodeStore stitched;
-  std::vector<std::array<int, 3>> tris;
-  std::vector<int> labels;
-  stitch(false, stitched, tris, labels);
-  am.seconds.regions = seconds_since(stage_start);
-  stage_start = Clock::now();
-  // Crossing triangles inside one region: the front's visibility tests run in (phi, h), and at
-  // a depth-jump wall (an ear's rim) the flat 3D triangles' footprints can overlap where their
-  // parameter triangles do not (3 pairs at a quarter of the sample units with segment_spacing:
-  // finer; none at the defaults). Such a region, and one whose front did not close, is meshed
-  // again with the other front orders (GET-NEXT-EDGE), which build a different mesh there, and
-  // the first without crossings and holes is kept (else the least bad).
-  StitchDefects defects = stitch_defects(tris, labels, stitched.pos);
+  RegionJob best = job;
+  auto best_badness = badness(job);
+  AnimationMesh::StageSeconds spent = job.thread_seconds;
+  std::vector<std::pair<EdgeStrategy, std::uint64_t>> orders;
+  for (const EdgeStrategy s : {EdgeStrategy::Shortest, EdgeStrategy::Longest, EdgeStrategy::Random})
+    if (s != job.in.strategy) orders.push_back({s, job.in.seed});
+  orders.push_back({EdgeStrategy::Random, job.in.seed + 1});
+  orders.push_back({EdgeStrategy::Random, job.in.seed + 2});
+  for (const auto& [strategy, seed] : orders) {
+    if (best_badness == std::pair{0, std::size_t{0}}) break;
+    job.in.strategy = strategy;
+    job.in.seed = seed;
+    job.thread_seconds = {};
+    mesher.mesh_region(job);
+    spent.regions += job.thread_seconds.regions;
+    spent.flips += job.thread_seconds.flips;
+    spent.smoothing += job.thread_seconds.smoothing;
+    spent.repair += job.thread_seconds.repair;
+    if (const auto b = badness(job); b < best_badness) {
+      best = job;
+      best_badness = b;
+    }
+  }
+  job = std::move(best);
+  job.thread_seconds = spent;  // every attempt's time
+}
+
+// Crossing triangles inside one region: the front's visibility tests run in (phi, h), and at
+// a depth-jump wall (an ear's rim) the flat 3D triangles' footprints can overlap where their
+// parameter triangles do not (3 pairs at a quarter of the sample units with segment_spacing:
+// finer; none at the defaults). Such a region, and one whose front did not close, is meshed
+// again with the other front orders (GET-NEXT-EDGE), which build a different mesh there, and
+// the first without crossings and holes is kept (else the least bad). If any region needed it,
+// the regions are stitched again and `defects` counted again.
+void remesh_defective_regions(std::vector<RegionJob>& jobs, const RegionMesher& mesher,
+                              StitchedMesh& stitched, StitchDefects& defects,
+                              std::vector<int>& regions_remeshed) {
   const auto needs_remeshing = [&](const RegionJob& job) {
     return job.stats.unmeshed_front_edges > 0 ||
            std::binary_search(defects.regions_crossing_themselves.begin(),
                               defects.regions_crossing_themselves.end(), job.region);
   };
-  if (std::any_of(jobs.begin(), jobs.end(), needs_remeshing)) {
-    for (RegionJob& job : jobs) {
-      if (!needs_remeshing(job)) continue;
-      // The surface Delaunay mesher has no front order to change.
-      if (job.stats.mesher == "delaunay") continue;
-      am.regions_remeshed.push_back(job.region);
-      // An attempt is better with fewer unclosed front edges (a hole is worse than a crossing),
-      // then fewer crossings.
-      const auto badness = [&](const RegionJob& j) {
-        return std::pair{j.stats.unmeshed_front_edges, crossings_within(j.tris, j.nodes.pos)};
-      };
-      RegionJob best = job;
-      auto best_badness = badness(job);
-      AnimationMesh::StageSeconds spent = job.thread_seconds;
-      std::vector<std::pair<EdgeStrategy, std::uint64_t>> orders;
-      for (const EdgeStrategy s :
-           {EdgeStrategy::Shortest, EdgeStrategy::Longest, EdgeStrategy::Random})
-        if (s != job.in.strategy) orders.push_back({s, job.in.seed});
-      orders.push_back({EdgeStrategy::Random, job.in.seed + 1});
-      orders.push_back({EdgeStrategy::Random, job.in.seed + 2});
-      for (const auto& [strategy, seed] : orders) {
-        if (best_badness == std::pair{0, std::size_t{0}}) break;
-        job.in.strategy = strategy;
-        job.in.seed = seed;
-        job.thread_seconds = {};
-        mesh_region(job);
-        spent.regions += job.thread_seconds.regions;
-        spent.flips += job.thread_seconds.flips;
-        spent.smoothing += job.thread_seconds.smoothing;
-        spent.repair += job.thread_seconds.repair;
-        if (const auto b = badness(job); b < best_badness) {
-          best = job;
-          best_badness = b;
-        }
-      }
-      job = std::move(best);
-      job.thread_seconds = spent;  // every attempt's time
-    }
-    stitched = {};
-    tris.clear();
-    labels.clear();
-    stitch(false, stitched, tris, labels);
-    defects = stitch_defects(tris, labels, stitched.pos);
+  if (!std::any_of(jobs.begin(), jobs.end(), needs_remeshing)) return;
+  for (RegionJob& job : jobs) {
+    if (!needs_remeshing(job)) continue;
+    // The surface Delaunay mesher has no front order to change.
+    if (job.stats.mesher == "delaunay") continue;
+    regions_remeshed.push_back(job.region);
+    remesh_with_other_front_orders(job, mesher);
   }
+  stitched = {};  // freed before the new one is built
+  stitched = mesher.stitch(jobs, false);
+  defects = stitch_defects(stitched.tris, stitched.labels, stitched.nodes.pos);
+}
+
+// The regions' statistics and thread times summed into am.
+void add_region_stats(const std::vector<RegionJob>& jobs, AnimationMesh& am) {
   for (const RegionJob& job : jobs) {
     am.region_stats.push_back(job.stats);
     am.flips += job.flips;
@@ -829,19 +901,24 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
     am.thread_seconds.smoothing += job.thread_seconds.smoothing;
     am.thread_seconds.repair += job.thread_seconds.repair;
   }
-  // The regions did not see each other (above). If the stitched mesh has an edge with more
-  // than two triangles, or more crossings between regions than the meshers left, the flips,
-  // smoothing and repair are done again on the stitched mesh as the meshers left it, where every
-  // edge and every changed triangle is tested against the whole mesh. (Neither has happened on
-  // the sample head at any unit size tried.)
+}
+
+// The regions did not see each other (RegionMesher::postprocess_region). If the stitched mesh
+// has an edge with more than two triangles, or more crossings between regions than the meshers
+// left, the flips, smoothing and repair are done again on the stitched mesh as the meshers left
+// it, where every edge and every changed triangle is tested against the whole mesh. (Neither
+// has happened on the sample head at any unit size tried.) Also where the settings ask for the
+// post-processing on the stitched mesh. The result replaces `stitched` and am's figures.
+void postprocess_stitched_if_needed(const std::vector<RegionJob>& jobs, const RegionMesher& mesher,
+                                    const StitchDefects& defects, StitchedMesh& stitched,
+                                    AnimationMesh& am) {
+  const RegionSettings& settings = mesher.settings;
   if (!settings.parallel_postprocessing || defects.crossings > 0 || defects.overfull_edges > 0) {
-    detail::NodeStore meshed;
-    std::vector<std::array<int, 3>> tris_meshed;
-    std::vector<int> labels_meshed;
-    stitch(true, meshed, tris_meshed, labels_meshed);
+    StitchedMesh meshed = mesher.stitch(jobs, true);
     if (!settings.parallel_postprocessing || defects.overfull_edges > 0 ||
-        defects.crossings > stitch_defects(tris_meshed, labels_meshed, meshed.pos).crossings) {
-      const PostResult r = postprocess(tris_meshed, labels_meshed, meshed);
+        defects.crossings >
+            stitch_defects(meshed.tris, meshed.labels, meshed.nodes.pos).crossings) {
+      const PostResult r = mesher.postprocess(meshed.tris, meshed.labels, meshed.nodes);
       am.flips = r.flips;
       am.valence_flip_retries = r.valence_flip_retries;
       am.repair_operations = r.repair.operations;
@@ -853,14 +930,16 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
       am.seconds.smoothing = r.seconds.smoothing;
       am.seconds.repair = r.seconds.repair;
       stitched = std::move(meshed);
-      tris = std::move(tris_meshed);
-      labels = std::move(labels_meshed);
     }
   }
-  am.seconds.check = seconds_since(stage_start);
-  for (RegionJob& job : jobs) job = {};
-  detail::NodeStore& store_all = stitched;
-  // Compact: drop nodes no triangle uses (segments bordering nothing meshed).
+}
+
+// Compact: drop nodes no triangle uses (segments bordering nothing meshed). The used nodes and
+// the triangles go to am.mesh; returns every stitched node's index there (-1: dropped).
+std::vector<int> add_used_nodes_and_triangles(const StitchedMesh& stitched,
+                                              std::size_t boundary_nodes, AnimationMesh& am) {
+  const detail::NodeStore& store_all = stitched.nodes;
+  const std::vector<std::array<int, 3>>& tris = stitched.tris;
   std::vector<int> used(store_all.pos.size(), 0);
   for (const auto& t : tris)
     for (int v : t) used[v] = 1;
@@ -875,8 +954,15 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
     }
   for (std::size_t t = 0; t < tris.size(); ++t) {
     am.mesh.triangles.push_back({remap[tris[t][0]], remap[tris[t][1]], remap[tris[t][2]]});
-    am.mesh.face_labels.push_back(labels[t]);
+    am.mesh.face_labels.push_back(stitched.labels[t]);
   }
+  return remap;
+}
+
+// Every segment's chain in the mesh's numbering (-1 for a dropped node); the chains whose nodes
+// are all in the mesh give its line edges.
+void add_segment_chains(const RegionGraph& g, const SegmentNodes& seg,
+                        const std::vector<int>& remap, AnimationMesh& am) {
   for (std::size_t s = 0; s < seg.chains.size(); ++s) {
     std::vector<int> chain;
     bool complete = true;
@@ -891,7 +977,10 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
       am.line_edge_line.push_back(g.segments[s].line);
     }
   }
-  // Seams: each seam line's node list in line order (segments are in line order already).
+}
+
+// Seams: each seam line's node list in line order (segments are in line order already).
+void add_seams(const RegionGraph& g, const LineSet& lines, AnimationMesh& am) {
   for (std::size_t s = 0; s < g.segments.size(); ++s) {
     const AnimationLine& line = lines.lines[g.segments[s].line];
     if (line.kind != LineKind::Seam) continue;
@@ -899,6 +988,39 @@ AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
     for (int v : am.segment_chains[s])
       if (list.empty() || list.back() != v) list.push_back(v);
   }
+}
+
+}  // namespace
+
+AnimationMesh build_animation_mesh(const RegionGraph& g, const LineSet& lines,
+                                   const ScanSurface& surface, const RegionSettings& settings) {
+  check_triangle_budget(g, surface);
+  auto stage_start = Clock::now();
+  AnimationMesh am;
+  const SegmentNodes seg = initialise_segments(g, lines, surface, settings);
+  const detail::NodeStore store = segment_node_store(seg, surface);
+  const std::size_t boundary_nodes = store.params.size();
+  am.seconds.segments = seconds_since(stage_start);
+
+  stage_start = Clock::now();
+  std::vector<RegionJob> jobs = region_jobs(g, seg, settings);
+  const std::unordered_set<std::uint64_t> constraint = segment_constraint_edges(seg);
+  const RegionMesher mesher{g, surface, settings, store, boundary_nodes, constraint};
+  mesh_regions_in_parallel(jobs, mesher);
+  StitchedMesh stitched = mesher.stitch(jobs, false);
+  am.seconds.regions = seconds_since(stage_start);
+
+  stage_start = Clock::now();
+  StitchDefects defects = stitch_defects(stitched.tris, stitched.labels, stitched.nodes.pos);
+  remesh_defective_regions(jobs, mesher, stitched, defects, am.regions_remeshed);
+  add_region_stats(jobs, am);
+  postprocess_stitched_if_needed(jobs, mesher, defects, stitched, am);
+  am.seconds.check = seconds_since(stage_start);
+  for (RegionJob& job : jobs) job = {};
+
+  const std::vector<int> remap = add_used_nodes_and_triangles(stitched, boundary_nodes, am);
+  add_segment_chains(g, seg, remap, am);
+  add_seams(g, lines, am);
   am.mesh.compute_vertex_normals();
   return am;
 }
