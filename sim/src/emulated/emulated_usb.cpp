@@ -121,6 +121,230 @@ void hand_over(UMockdevIoctlClient* client, UMockdevIoctlData* arg, UMockdevIoct
 
 usbdevfs_urb* urb_of(UMockdevIoctlData* d) { return reinterpret_cast<usbdevfs_urb*>(d->data); }
 
+gboolean answer_get_capabilities(UMockdevIoctlClient* client, UMockdevIoctlData* arg) {
+  UMockdevIoctlData* d = umockdev_ioctl_data_resolve(arg, 0, sizeof(std::uint32_t), nullptr);
+  const std::uint32_t caps = USBDEVFS_CAP_BULK_CONTINUATION | USBDEVFS_CAP_NO_PACKET_SIZE_LIM |
+                             USBDEVFS_CAP_REAP_AFTER_DISCONNECT | USBDEVFS_CAP_ZERO_PACKET;
+  std::memcpy(d->data, &caps, sizeof caps);
+  umockdev_ioctl_data_unref(d);
+  complete(client, 0, 0);
+  return TRUE;
+}
+
+gboolean answer_getdriver(const UsbBoardEmulation& board, UMockdevIoctlClient* client,
+                          UMockdevIoctlData* arg) {
+  UMockdevIoctlData* d = umockdev_ioctl_data_resolve(arg, 0, sizeof(usbdevfs_getdriver), nullptr);
+  auto* g = reinterpret_cast<usbdevfs_getdriver*>(d->data);
+  if (board.state.kernel_driver_detached) {
+    umockdev_ioctl_data_unref(d);
+    complete(client, -1, ENODATA);
+  } else {
+    std::snprintf(g->driver, sizeof g->driver, "%s", kernel_driver_of(board.bridge));
+    umockdev_ioctl_data_unref(d);
+    complete(client, 0, 0);
+  }
+  return TRUE;
+}
+
+// USBDEVFS_IOCTL forwards an ioctl to the interface's kernel driver; libusb sends DISCONNECT and
+// CONNECT through it to detach and re-attach that driver.
+gboolean answer_kernel_driver_ioctl(UsbBoardEmulation& board, UMockdevIoctlClient* client,
+                                    UMockdevIoctlData* arg) {
+  UMockdevIoctlData* d = umockdev_ioctl_data_resolve(arg, 0, sizeof(usbdevfs_ioctl), nullptr);
+  const int code = reinterpret_cast<usbdevfs_ioctl*>(d->data)->ioctl_code;
+  umockdev_ioctl_data_unref(d);
+  if (code == static_cast<int>(USBDEVFS_DISCONNECT)) board.state.kernel_driver_detached = true;
+  if (code == static_cast<int>(USBDEVFS_CONNECT)) board.state.kernel_driver_detached = false;
+  complete(client, 0, 0);
+  return TRUE;
+}
+
+gboolean answer_claim_interface(UsbBoardEmulation& board, UMockdevIoctlClient* client, bool gone) {
+  if (gone) return complete(client, -1, ENODEV), TRUE;
+  if (!board.state.kernel_driver_detached) return complete(client, -1, EBUSY), TRUE;
+  ++board.state.claimed_interfaces;
+  complete(client, 0, 0);
+  return TRUE;
+}
+
+gboolean answer_release_interface(UsbBoardEmulation& board, UMockdevIoctlClient* client) {
+  --board.state.claimed_interfaces;
+  complete(client, 0, 0);
+  return TRUE;
+}
+
+gboolean answer_clear_halt(UsbBoardEmulation& board, UMockdevIoctlClient* client) {
+  ++board.state.stalls_cleared;
+  complete(client, 0, 0);
+  return TRUE;
+}
+
+// A control transfer: `buffer` holds the 8-byte setup packet, then the data stage. Sets the URB's
+// status and actual length; a request the bridge chip would stall ends with -EPIPE.
+void run_control_transfer(UsbBoardEmulation& board, usbdevfs_urb* urb, UMockdevIoctlData* buffer) {
+  const auto* bytes = buffer->data;
+  const std::uint8_t request_type = bytes[0], req = bytes[1];
+  const unsigned value = bytes[2] | (bytes[3] << 8);
+  const unsigned index = bytes[4] | (bytes[5] << 8);
+  const unsigned length = bytes[6] | (bytes[7] << 8);
+  if (board.bridge != EmulatedBridge::CdcAcm) {
+    if (!bridge_request(board, request_type, req, value, index, buffer->data + 8,
+                        std::min<unsigned>(length, urb->buffer_length - 8))) {
+      urb->status = -EPIPE;
+      urb->actual_length = 0;
+      return;
+    }
+    ++board.state.vendor_requests;
+  } else if (request_type == 0x21 && req == 0x20 && length >= 7) {  // SET_LINE_CODING
+    board.state.line_coding_baud =
+        bytes[8] | (bytes[9] << 8) | (bytes[10] << 16) | (bytes[11] << 24);
+    board.state.data_bits = bytes[14];
+  } else if (request_type == 0x21 && req == 0x22) {  // SET_CONTROL_LINE_STATE
+    const bool dtr = value & 1;
+    // An Arduino resets when DTR rises: the banner follows after the boot time.
+    if (dtr && !board.state.dtr) {
+      board.firmware->reset();
+      board.unread.clear();
+    }
+    board.state.dtr = dtr;
+  }
+  urb->actual_length = static_cast<int>(length);
+}
+
+// A bulk OUT transfer: the bytes go to the firmware's serial input, garbled if the baud is off.
+void send_to_firmware(UsbBoardEmulation& board, usbdevfs_urb* urb, const guint8* bytes) {
+  std::string sent(reinterpret_cast<const char*>(bytes),
+                   static_cast<std::size_t>(urb->buffer_length));
+  board.firmware->receive(line_garbled(board) ? garble(sent) : sent);
+  urb->actual_length = urb->buffer_length;
+}
+
+// Control and bulk OUT URBs are answered at once and wait in `done`; bulk IN URBs wait in
+// `in_flight` for firmware output. The URB stays resolved until it is reaped.
+gboolean answer_submiturb(UsbBoardEmulation& board, UMockdevIoctlClient* client,
+                          UMockdevIoctlData* arg, bool gone) {
+  if (gone) return complete(client, -1, ENODEV), TRUE;
+  UMockdevIoctlData* urb_data = umockdev_ioctl_data_resolve(arg, 0, sizeof(usbdevfs_urb), nullptr);
+  usbdevfs_urb* urb = urb_of(urb_data);
+  UMockdevIoctlData* buffer = umockdev_ioctl_data_resolve(
+      urb_data, offsetof(usbdevfs_urb, buffer), static_cast<gsize>(urb->buffer_length), nullptr);
+  const auto* bytes = buffer->data;
+  urb->status = 0;
+  if (urb->type == USBDEVFS_URB_TYPE_CONTROL && urb->buffer_length >= 8) {
+    run_control_transfer(board, urb, buffer);
+    umockdev_ioctl_data_unref(buffer);
+    board.done.push_back(urb_data);
+  } else if (urb->type == USBDEVFS_URB_TYPE_BULK && urb->endpoint == board.ep_out) {
+    send_to_firmware(board, urb, bytes);
+    umockdev_ioctl_data_unref(buffer);
+    board.done.push_back(urb_data);
+  } else if (urb->type == USBDEVFS_URB_TYPE_BULK && urb->endpoint == board.ep_in) {
+    umockdev_ioctl_data_unref(buffer);
+    board.in_flight.push_back(urb_data);
+  } else {
+    umockdev_ioctl_data_unref(buffer);
+    umockdev_ioctl_data_unref(urb_data);
+    return complete(client, -1, EINVAL), TRUE;
+  }
+  complete(client, 0, 0);
+  return TRUE;
+}
+
+gboolean answer_discardurb(UsbBoardEmulation& board, UMockdevIoctlClient* client,
+                           UMockdevIoctlData* arg) {
+  const auto client_urb = reinterpret_cast<gulong>(*reinterpret_cast<void**>(arg->data));
+  for (auto it = board.in_flight.begin(); it != board.in_flight.end(); ++it) {
+    if ((*it)->client_addr != client_urb) continue;
+    urb_of(*it)->status = -ENOENT;
+    urb_of(*it)->actual_length = 0;
+    board.done.push_back(*it);
+    board.in_flight.erase(it);
+    return complete(client, 0, 0), TRUE;
+  }
+  complete(client, -1, EINVAL);
+  return TRUE;
+}
+
+// Moves waiting firmware output (`unread`) into a bulk IN URB's buffer; returns the bytes written.
+std::size_t fill_in_urb(UsbBoardEmulation& board, usbdevfs_urb* urb, bool ftdi) {
+  // urb->buffer points at the local copy of the client buffer resolved at submit time.
+  auto* out = static_cast<unsigned char*>(urb->buffer);
+  const auto room = static_cast<std::size_t>(urb->buffer_length);
+  std::size_t n = 0;
+  if (ftdi) {
+    // Packets of in_packet bytes, each headed by modem status (CTS|DSR) and line status
+    // (transmitter empty); a short packet ends the transfer.
+    const std::size_t payload = static_cast<std::size_t>(board.in_packet) - 2;
+    while (n + 2 <= room) {
+      const std::size_t k = std::min({payload, board.unread.size(), room - n - 2});
+      out[n] = 0x31;
+      out[n + 1] = 0x60;
+      std::memcpy(out + n + 2, board.unread.data(), k);
+      board.unread.erase(0, k);
+      n += 2 + k;
+      if (k < payload) break;
+    }
+  } else {
+    n = std::min(board.unread.size(), room);
+    std::memcpy(out, board.unread.data(), n);
+    board.unread.erase(0, n);
+  }
+  return n;
+}
+
+// Hands over the oldest bulk IN URB if it has an answer: an error when the device is gone or the
+// endpoint stalled, else the firmware's output. Returns false when there is nothing to give yet.
+bool reap_in_flight(UsbBoardEmulation& board, UMockdevIoctlClient* client, UMockdevIoctlData* arg,
+                    bool gone) {
+  UMockdevIoctlData* urb_data = board.in_flight.front();
+  usbdevfs_urb* urb = urb_of(urb_data);
+  if (gone || board.firmware->stalled()) {
+    // Unplugged: the host controller gives back every URB with -ENODEV
+    // (libusb: LIBUSB_ERROR_NO_DEVICE). Stalled: the endpoint answers STALL (-EPIPE).
+    urb->status = gone ? -ENODEV : -EPIPE;
+    urb->actual_length = 0;
+    board.in_flight.pop_front();
+    hand_over(client, arg, urb_data);
+    return true;
+  }
+  const std::string fresh = board.firmware->transmit();
+  board.unread += line_garbled(board) ? garble(fresh) : fresh;
+  const auto now = std::chrono::steady_clock::now();
+  // An FT232R sends a status-only packet every latency period (16 ms) when idle.
+  const bool ftdi = board.bridge == EmulatedBridge::Ftdi;
+  const bool ftdi_idle_packet = ftdi && now - board.last_in_packet > std::chrono::milliseconds(16);
+  if (!board.unread.empty() || ftdi_idle_packet) {
+    const std::size_t n = fill_in_urb(board, urb, ftdi);
+    board.last_in_packet = now;
+    urb->actual_length = static_cast<int>(n);
+    urb->status = 0;
+    board.in_flight.pop_front();
+    hand_over(client, arg, urb_data);
+    return true;
+  }
+  return false;
+}
+
+// REAPURB and REAPURBNDELAY alike: a finished URB if there is one, else EAGAIN (ENODEV once the
+// device is gone).
+gboolean answer_reapurb(UsbBoardEmulation& board, UMockdevIoctlClient* client,
+                        UMockdevIoctlData* arg, bool gone) {
+  if (!board.done.empty()) {
+    UMockdevIoctlData* urb = board.done.front();
+    board.done.erase(board.done.begin());
+    hand_over(client, arg, urb);
+    return TRUE;
+  }
+  if (!board.in_flight.empty() && reap_in_flight(board, client, arg, gone)) return TRUE;
+  // Nothing to reap. The usbfs node under umockdev is a socket that always polls writable,
+  // so libusb asks again at once; a short pause keeps that loop from eating a core.
+  std::this_thread::sleep_for(std::chrono::microseconds(50));
+  complete(client, -1, gone ? ENODEV : EAGAIN);
+  return TRUE;
+}
+
+// umockdev's handle-ioctl signal for the usbfs node, on umockdev's worker thread. FALSE (the
+// default branch) tells umockdev the request was not handled here.
 gboolean handle_usb_ioctl(UMockdevIoctlBase*, UMockdevIoctlClient* client, gpointer user) {
   auto* board = static_cast<UsbBoardEmulation*>(user);
   std::lock_guard lock(board->mutex);
@@ -129,197 +353,31 @@ gboolean handle_usb_ioctl(UMockdevIoctlBase*, UMockdevIoctlClient* client, gpoin
   const bool gone = board->firmware->unplugged();
 
   switch (request) {
-    case USBDEVFS_GET_CAPABILITIES: {
-      UMockdevIoctlData* d = umockdev_ioctl_data_resolve(arg, 0, sizeof(std::uint32_t), nullptr);
-      const std::uint32_t caps = USBDEVFS_CAP_BULK_CONTINUATION | USBDEVFS_CAP_NO_PACKET_SIZE_LIM |
-                                 USBDEVFS_CAP_REAP_AFTER_DISCONNECT | USBDEVFS_CAP_ZERO_PACKET;
-      std::memcpy(d->data, &caps, sizeof caps);
-      umockdev_ioctl_data_unref(d);
-      complete(client, 0, 0);
-      return TRUE;
-    }
-    case USBDEVFS_GETDRIVER: {
-      UMockdevIoctlData* d =
-          umockdev_ioctl_data_resolve(arg, 0, sizeof(usbdevfs_getdriver), nullptr);
-      auto* g = reinterpret_cast<usbdevfs_getdriver*>(d->data);
-      if (board->state.kernel_driver_detached) {
-        umockdev_ioctl_data_unref(d);
-        complete(client, -1, ENODATA);
-      } else {
-        std::snprintf(g->driver, sizeof g->driver, "%s", kernel_driver_of(board->bridge));
-        umockdev_ioctl_data_unref(d);
-        complete(client, 0, 0);
-      }
-      return TRUE;
-    }
-    case USBDEVFS_IOCTL: {
-      UMockdevIoctlData* d = umockdev_ioctl_data_resolve(arg, 0, sizeof(usbdevfs_ioctl), nullptr);
-      const int code = reinterpret_cast<usbdevfs_ioctl*>(d->data)->ioctl_code;
-      umockdev_ioctl_data_unref(d);
-      if (code == static_cast<int>(USBDEVFS_DISCONNECT)) board->state.kernel_driver_detached = true;
-      if (code == static_cast<int>(USBDEVFS_CONNECT)) board->state.kernel_driver_detached = false;
-      complete(client, 0, 0);
-      return TRUE;
-    }
+    case USBDEVFS_GET_CAPABILITIES:
+      return answer_get_capabilities(client, arg);
+    case USBDEVFS_GETDRIVER:
+      return answer_getdriver(*board, client, arg);
+    case USBDEVFS_IOCTL:
+      return answer_kernel_driver_ioctl(*board, client, arg);
     case USBDEVFS_CLAIMINTERFACE:
-      if (gone) return complete(client, -1, ENODEV), TRUE;
-      if (!board->state.kernel_driver_detached) return complete(client, -1, EBUSY), TRUE;
-      ++board->state.claimed_interfaces;
-      complete(client, 0, 0);
-      return TRUE;
+      return answer_claim_interface(*board, client, gone);
     case USBDEVFS_RELEASEINTERFACE:
-      --board->state.claimed_interfaces;
-      complete(client, 0, 0);
-      return TRUE;
+      return answer_release_interface(*board, client);
     case USBDEVFS_CLEAR_HALT:
-      ++board->state.stalls_cleared;
-      complete(client, 0, 0);
-      return TRUE;
+      return answer_clear_halt(*board, client);
     case USBDEVFS_RESET:
     case USBDEVFS_RESETEP:
     case USBDEVFS_SETCONFIGURATION:
       complete(client, 0, 0);
       return TRUE;
 
-    case USBDEVFS_SUBMITURB: {
-      if (gone) return complete(client, -1, ENODEV), TRUE;
-      UMockdevIoctlData* urb_data =
-          umockdev_ioctl_data_resolve(arg, 0, sizeof(usbdevfs_urb), nullptr);
-      usbdevfs_urb* urb = urb_of(urb_data);
-      UMockdevIoctlData* buffer =
-          umockdev_ioctl_data_resolve(urb_data, offsetof(usbdevfs_urb, buffer),
-                                      static_cast<gsize>(urb->buffer_length), nullptr);
-      const auto* bytes = buffer->data;
-      urb->status = 0;
-      if (urb->type == USBDEVFS_URB_TYPE_CONTROL && urb->buffer_length >= 8) {
-        const std::uint8_t request_type = bytes[0], req = bytes[1];
-        const unsigned value = bytes[2] | (bytes[3] << 8);
-        const unsigned index = bytes[4] | (bytes[5] << 8);
-        const unsigned length = bytes[6] | (bytes[7] << 8);
-        if (board->bridge != EmulatedBridge::CdcAcm) {
-          if (!bridge_request(*board, request_type, req, value, index, buffer->data + 8,
-                              std::min<unsigned>(length, urb->buffer_length - 8))) {
-            urb->status = -EPIPE;
-            urb->actual_length = 0;
-            umockdev_ioctl_data_unref(buffer);
-            board->done.push_back(urb_data);
-            complete(client, 0, 0);
-            return TRUE;
-          }
-          ++board->state.vendor_requests;
-        } else if (request_type == 0x21 && req == 0x20 && length >= 7) {  // SET_LINE_CODING
-          board->state.line_coding_baud =
-              bytes[8] | (bytes[9] << 8) | (bytes[10] << 16) | (bytes[11] << 24);
-          board->state.data_bits = bytes[14];
-        } else if (request_type == 0x21 && req == 0x22) {  // SET_CONTROL_LINE_STATE
-          const bool dtr = value & 1;
-          // An Arduino resets when DTR rises: the banner follows after the boot time.
-          if (dtr && !board->state.dtr) {
-            board->firmware->reset();
-            board->unread.clear();
-          }
-          board->state.dtr = dtr;
-        }
-        urb->actual_length = static_cast<int>(length);
-        umockdev_ioctl_data_unref(buffer);
-        board->done.push_back(urb_data);
-      } else if (urb->type == USBDEVFS_URB_TYPE_BULK && urb->endpoint == board->ep_out) {
-        std::string sent(reinterpret_cast<const char*>(bytes),
-                         static_cast<std::size_t>(urb->buffer_length));
-        board->firmware->receive(line_garbled(*board) ? garble(sent) : sent);
-        urb->actual_length = urb->buffer_length;
-        umockdev_ioctl_data_unref(buffer);
-        board->done.push_back(urb_data);
-      } else if (urb->type == USBDEVFS_URB_TYPE_BULK && urb->endpoint == board->ep_in) {
-        umockdev_ioctl_data_unref(buffer);
-        board->in_flight.push_back(urb_data);
-      } else {
-        umockdev_ioctl_data_unref(buffer);
-        umockdev_ioctl_data_unref(urb_data);
-        return complete(client, -1, EINVAL), TRUE;
-      }
-      complete(client, 0, 0);
-      return TRUE;
-    }
-
-    case USBDEVFS_DISCARDURB: {
-      const auto client_urb = reinterpret_cast<gulong>(*reinterpret_cast<void**>(arg->data));
-      for (auto it = board->in_flight.begin(); it != board->in_flight.end(); ++it) {
-        if ((*it)->client_addr != client_urb) continue;
-        urb_of(*it)->status = -ENOENT;
-        urb_of(*it)->actual_length = 0;
-        board->done.push_back(*it);
-        board->in_flight.erase(it);
-        return complete(client, 0, 0), TRUE;
-      }
-      complete(client, -1, EINVAL);
-      return TRUE;
-    }
-
+    case USBDEVFS_SUBMITURB:
+      return answer_submiturb(*board, client, arg, gone);
+    case USBDEVFS_DISCARDURB:
+      return answer_discardurb(*board, client, arg);
     case USBDEVFS_REAPURB:
-    case USBDEVFS_REAPURBNDELAY: {
-      if (!board->done.empty()) {
-        UMockdevIoctlData* urb = board->done.front();
-        board->done.erase(board->done.begin());
-        hand_over(client, arg, urb);
-        return TRUE;
-      }
-      if (!board->in_flight.empty()) {
-        UMockdevIoctlData* urb_data = board->in_flight.front();
-        usbdevfs_urb* urb = urb_of(urb_data);
-        if (gone || board->firmware->stalled()) {
-          // Unplugged: the host controller gives back every URB with -ENODEV
-          // (libusb: LIBUSB_ERROR_NO_DEVICE). Stalled: the endpoint answers STALL (-EPIPE).
-          urb->status = gone ? -ENODEV : -EPIPE;
-          urb->actual_length = 0;
-          board->in_flight.pop_front();
-          hand_over(client, arg, urb_data);
-          return TRUE;
-        }
-        const std::string fresh = board->firmware->transmit();
-        board->unread += line_garbled(*board) ? garble(fresh) : fresh;
-        const auto now = std::chrono::steady_clock::now();
-        // An FT232R sends a status-only packet every latency period (16 ms) when idle.
-        const bool ftdi = board->bridge == EmulatedBridge::Ftdi;
-        const bool ftdi_idle_packet =
-            ftdi && now - board->last_in_packet > std::chrono::milliseconds(16);
-        if (!board->unread.empty() || ftdi_idle_packet) {
-          // urb->buffer points at the local copy of the client buffer resolved at submit time.
-          auto* out = static_cast<unsigned char*>(urb->buffer);
-          const auto room = static_cast<std::size_t>(urb->buffer_length);
-          std::size_t n = 0;
-          if (ftdi) {
-            // Packets of in_packet bytes, each headed by modem status (CTS|DSR) and line status
-            // (transmitter empty); a short packet ends the transfer.
-            const std::size_t payload = static_cast<std::size_t>(board->in_packet) - 2;
-            while (n + 2 <= room) {
-              const std::size_t k = std::min({payload, board->unread.size(), room - n - 2});
-              out[n] = 0x31;
-              out[n + 1] = 0x60;
-              std::memcpy(out + n + 2, board->unread.data(), k);
-              board->unread.erase(0, k);
-              n += 2 + k;
-              if (k < payload) break;
-            }
-          } else {
-            n = std::min(board->unread.size(), room);
-            std::memcpy(out, board->unread.data(), n);
-            board->unread.erase(0, n);
-          }
-          board->last_in_packet = now;
-          urb->actual_length = static_cast<int>(n);
-          urb->status = 0;
-          board->in_flight.pop_front();
-          hand_over(client, arg, urb_data);
-          return TRUE;
-        }
-      }
-      // Nothing to reap. The usbfs node under umockdev is a socket that always polls writable,
-      // so libusb asks again at once; a short pause keeps that loop from eating a core.
-      std::this_thread::sleep_for(std::chrono::microseconds(50));
-      complete(client, -1, gone ? ENODEV : EAGAIN);
-      return TRUE;
-    }
+    case USBDEVFS_REAPURBNDELAY:
+      return answer_reapurb(*board, client, arg, gone);
     default:
       return FALSE;
   }

@@ -85,212 +85,263 @@ T* view(UMockdevIoctlData* d) {
   return reinterpret_cast<T*>(d->data);
 }
 
+// Completes the client's ioctl with `result` and `error` (its errno); TRUE tells umockdev the
+// request was handled here.
+gboolean complete_ioctl(UMockdevIoctlClient* client, long result, int error) {
+  umockdev_ioctl_client_complete(client, result, error);
+  return TRUE;
+}
+
+// The ioctl's argument struct, copied from the client; umockdev writes it back on completion.
+UMockdevIoctlData* resolve_arg(UMockdevIoctlData* arg, std::size_t size) {
+  return umockdev_ioctl_data_resolve(arg, 0, size, nullptr);
+}
+
+gboolean answer_querycap(const CameraEmulation& cam, UMockdevIoctlClient* client,
+                         UMockdevIoctlData* arg) {
+  const auto& options = cam.camera->options();
+  UMockdevIoctlData* d = resolve_arg(arg, sizeof(v4l2_capability));
+  auto* cap = view<v4l2_capability>(d);
+  std::memset(cap, 0, sizeof *cap);
+  std::snprintf(reinterpret_cast<char*>(cap->driver), sizeof cap->driver, "uvcvideo");
+  std::snprintf(reinterpret_cast<char*>(cap->card), sizeof cap->card, "%s", options.card.c_str());
+  std::snprintf(reinterpret_cast<char*>(cap->bus_info), sizeof cap->bus_info, "%s",
+                options.bus_info.c_str());
+  cap->version = 0x00060100;
+  cap->device_caps = V4L2_CAP_VIDEO_CAPTURE | V4L2_CAP_STREAMING;
+  cap->capabilities = cap->device_caps | V4L2_CAP_DEVICE_CAPS;
+  umockdev_ioctl_data_unref(d);
+  return complete_ioctl(client, 0, 0);
+}
+
+gboolean answer_enum_fmt(const CameraEmulation& cam, UMockdevIoctlClient* client,
+                         UMockdevIoctlData* arg) {
+  const auto& options = cam.camera->options();
+  UMockdevIoctlData* d = resolve_arg(arg, sizeof(v4l2_fmtdesc));
+  auto* f = view<v4l2_fmtdesc>(d);
+  const std::uint32_t i = f->index;
+  const bool ok = f->type == V4L2_BUF_TYPE_VIDEO_CAPTURE && i < options.formats.size();
+  if (ok) {
+    f->pixelformat = to_fourcc(options.formats[i]);
+    f->flags = options.formats[i] == SimPixelFormat::Mjpeg ? V4L2_FMT_FLAG_COMPRESSED : 0;
+    std::snprintf(reinterpret_cast<char*>(f->description), sizeof f->description, "%s",
+                  options.formats[i] == SimPixelFormat::Mjpeg  ? "Motion-JPEG"
+                  : options.formats[i] == SimPixelFormat::Yuyv ? "YUYV 4:2:2"
+                                                               : "24-bit RGB 8-8-8");
+  }
+  umockdev_ioctl_data_unref(d);
+  return complete_ioctl(client, ok ? 0 : -1, ok ? 0 : EINVAL);
+}
+
+// G_FMT reports the current format; S_FMT and TRY_FMT negotiate one, which only S_FMT keeps.
+gboolean answer_fmt(CameraEmulation& cam, UMockdevIoctlClient* client, UMockdevIoctlData* arg,
+                    unsigned long request) {
+  const auto& options = cam.camera->options();
+  UMockdevIoctlData* d = resolve_arg(arg, sizeof(v4l2_format));
+  auto* f = view<v4l2_format>(d);
+  if (f->type != V4L2_BUF_TYPE_VIDEO_CAPTURE) {
+    umockdev_ioctl_data_unref(d);
+    return complete_ioctl(client, -1, EINVAL);
+  }
+  if (request != VIDIOC_G_FMT) {
+    // Another process streaming from the camera (CameraFaults::busy), or this one already
+    // streaming: uvcvideo refuses a format change with EBUSY.
+    if (request == VIDIOC_S_FMT && (cam.streaming || options.faults.busy)) {
+      umockdev_ioctl_data_unref(d);
+      return complete_ioctl(client, -1, EBUSY);
+    }
+    // Like uvcvideo: an unknown format falls back to the first one, the size to the
+    // sensor's (the simulated sensor has one mode).
+    SimPixelFormat chosen = options.formats.front();
+    for (auto candidate : options.formats)
+      if (to_fourcc(candidate) == f->fmt.pix.pixelformat) chosen = candidate;
+    if (request == VIDIOC_S_FMT) cam.format = chosen;
+    CameraEmulation tmp_view;
+    tmp_view.camera = cam.camera;
+    tmp_view.format = chosen;
+    fill_pix(tmp_view, f->fmt.pix);
+  } else {
+    fill_pix(cam, f->fmt.pix);
+  }
+  umockdev_ioctl_data_unref(d);
+  return complete_ioctl(client, 0, 0);
+}
+
+gboolean answer_parm(const CameraEmulation& cam, UMockdevIoctlClient* client,
+                     UMockdevIoctlData* arg, unsigned long request) {
+  const auto& options = cam.camera->options();
+  UMockdevIoctlData* d = resolve_arg(arg, sizeof(v4l2_streamparm));
+  auto* p = view<v4l2_streamparm>(d);
+  if (request == VIDIOC_S_PARM && p->parm.capture.timeperframe.denominator > 0) {
+    // The simulated sensor runs at its own rate whatever is asked, as many webcams do.
+  }
+  p->parm.capture.capability = V4L2_CAP_TIMEPERFRAME;
+  p->parm.capture.timeperframe.numerator = 1000;
+  p->parm.capture.timeperframe.denominator =
+      static_cast<std::uint32_t>(std::lround(options.fps * 1000));
+  umockdev_ioctl_data_unref(d);
+  return complete_ioctl(client, 0, 0);
+}
+
+gboolean answer_ctrl(CameraEmulation& cam, UMockdevIoctlClient* client, UMockdevIoctlData* arg,
+                     unsigned long request) {
+  UMockdevIoctlData* d = resolve_arg(arg, sizeof(v4l2_control));
+  auto* c = view<v4l2_control>(d);
+  const bool known = c->id == V4L2_CID_EXPOSURE_AUTO || c->id == V4L2_CID_EXPOSURE_ABSOLUTE ||
+                     c->id == V4L2_CID_GAIN || c->id == V4L2_CID_BRIGHTNESS;
+  if (known) {
+    if (request == VIDIOC_S_CTRL)
+      cam.controls[c->id] = c->value;
+    else
+      c->value = cam.controls[c->id];
+  }
+  umockdev_ioctl_data_unref(d);
+  return complete_ioctl(client, known ? 0 : -1, known ? 0 : EINVAL);
+}
+
+gboolean answer_reqbufs(CameraEmulation& cam, UMockdevIoctlClient* client, UMockdevIoctlData* arg) {
+  UMockdevIoctlData* d = resolve_arg(arg, sizeof(v4l2_requestbuffers));
+  auto* r = view<v4l2_requestbuffers>(d);
+  if (r->memory != V4L2_MEMORY_MMAP && r->memory != V4L2_MEMORY_USERPTR) {
+    umockdev_ioctl_data_unref(d);
+    return complete_ioctl(client, -1, EINVAL);
+  }
+  cam.memory = r->memory;
+  r->count = std::min<std::uint32_t>(r->count, 32);
+  cam.slots.assign(r->count, {});
+  cam.queue.clear();
+  r->capabilities = V4L2_BUF_CAP_SUPPORTS_MMAP | V4L2_BUF_CAP_SUPPORTS_USERPTR;
+  umockdev_ioctl_data_unref(d);
+  return complete_ioctl(client, 0, 0);
+}
+
+gboolean answer_querybuf(const CameraEmulation& cam, UMockdevIoctlClient* client,
+                         UMockdevIoctlData* arg) {
+  UMockdevIoctlData* d = resolve_arg(arg, sizeof(v4l2_buffer));
+  auto* b = view<v4l2_buffer>(d);
+  if (b->index >= cam.slots.size()) {
+    umockdev_ioctl_data_unref(d);
+    return complete_ioctl(client, -1, EINVAL);
+  }
+  v4l2_pix_format pix{};
+  fill_pix(cam, pix);
+  b->length = pix.sizeimage;
+  b->memory = cam.memory;
+  if (cam.memory == V4L2_MEMORY_MMAP) b->m.offset = b->index * ((pix.sizeimage + 4095) & ~4095u);
+  umockdev_ioctl_data_unref(d);
+  return complete_ioctl(client, 0, 0);
+}
+
+gboolean answer_qbuf(CameraEmulation& cam, UMockdevIoctlClient* client, UMockdevIoctlData* arg) {
+  UMockdevIoctlData* d = resolve_arg(arg, sizeof(v4l2_buffer));
+  auto* b = view<v4l2_buffer>(d);
+  if (b->index >= cam.slots.size() || b->memory != cam.memory || cam.slots[b->index].queued) {
+    umockdev_ioctl_data_unref(d);
+    return complete_ioctl(client, -1, EINVAL);
+  }
+  auto& slot = cam.slots[b->index];
+  if (cam.memory == V4L2_MEMORY_USERPTR) {
+    v4l2_pix_format pix{};
+    fill_pix(cam, pix);
+    if (b->m.userptr == 0 || b->length < pix.sizeimage) {
+      umockdev_ioctl_data_unref(d);
+      return complete_ioctl(client, -1, EINVAL);
+    }
+    slot.userptr = b->m.userptr;
+    slot.length = b->length;
+  }
+  slot.queued = true;
+  cam.queue.push_back(b->index);
+  umockdev_ioctl_data_unref(d);
+  return complete_ioctl(client, 0, 0);
+}
+
+// Captures a frame into the oldest queued USERPTR buffer, written through to the client's memory.
+gboolean answer_dqbuf(CameraEmulation& cam, UMockdevIoctlClient* client, UMockdevIoctlData* arg) {
+  if (!cam.streaming) return complete_ioctl(client, -1, EINVAL);
+  if (cam.queue.empty()) return complete_ioctl(client, -1, EAGAIN);
+  if (cam.memory != V4L2_MEMORY_USERPTR)
+    return complete_ioctl(client, -1, EAGAIN);  // see file comment
+  const SimCamera::Capture c = cam.camera->capture(cam.format);
+  if (c.status == SimCamera::Capture::Status::NotReady) return complete_ioctl(client, -1, EAGAIN);
+  if (c.status == SimCamera::Capture::Status::Unplugged) return complete_ioctl(client, -1, ENODEV);
+  if (c.status == SimCamera::Capture::Status::Eio) return complete_ioctl(client, -1, EIO);
+  const unsigned index = cam.queue.front();
+  cam.queue.pop_front();
+  auto& slot = cam.slots[index];
+  slot.queued = false;
+  UMockdevIoctlData* d = resolve_arg(arg, sizeof(v4l2_buffer));
+  auto* b = view<v4l2_buffer>(d);
+  b->index = index;
+  b->memory = V4L2_MEMORY_USERPTR;
+  b->m.userptr = slot.userptr;
+  b->length = slot.length;
+  const std::size_t n = std::min<std::size_t>(c.bytes.size(), slot.length);
+  UMockdevIoctlData* payload =
+      umockdev_ioctl_data_resolve(d, offsetof(v4l2_buffer, m.userptr), slot.length, nullptr);
+  std::memcpy(payload->data, c.bytes.data(), n);
+  b = view<v4l2_buffer>(d);
+  b->bytesused = static_cast<std::uint32_t>(n);
+  b->sequence = c.sequence;
+  b->flags = V4L2_BUF_FLAG_DONE | V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
+  b->field = V4L2_FIELD_NONE;
+  b->timestamp.tv_sec = static_cast<long>(c.timestamp_s);
+  b->timestamp.tv_usec = static_cast<long>((c.timestamp_s - std::floor(c.timestamp_s)) * 1e6);
+  umockdev_ioctl_data_unref(payload);
+  umockdev_ioctl_data_unref(d);
+  return complete_ioctl(client, 0, 0);
+}
+
+gboolean answer_streamon(CameraEmulation& cam, UMockdevIoctlClient* client) {
+  if (cam.slots.empty()) return complete_ioctl(client, -1, EINVAL);
+  cam.streaming = true;
+  cam.camera->start_streaming();
+  return complete_ioctl(client, 0, 0);
+}
+
+gboolean answer_streamoff(CameraEmulation& cam, UMockdevIoctlClient* client) {
+  cam.streaming = false;
+  cam.queue.clear();
+  for (auto& s : cam.slots) s.queued = false;
+  return complete_ioctl(client, 0, 0);
+}
+
+// umockdev's handle-ioctl signal for the video node, on umockdev's worker thread. FALSE (the
+// default branch) tells umockdev the request was not handled here.
 gboolean handle_v4l2_ioctl(UMockdevIoctlBase*, UMockdevIoctlClient* client, gpointer user) {
   auto* cam = static_cast<CameraEmulation*>(user);
   std::lock_guard lock(cam->mutex);
   const unsigned long request = umockdev_ioctl_client_get_request(client);
   UMockdevIoctlData* arg = umockdev_ioctl_client_get_arg(client);
-  const auto done = [&](long r, int e) {
-    umockdev_ioctl_client_complete(client, r, e);
-    return TRUE;
-  };
-  if (cam->camera->unplugged()) return done(-1, ENODEV);
-  const auto resolve = [&](std::size_t size) {
-    return umockdev_ioctl_data_resolve(arg, 0, size, nullptr);
-  };
-  const auto& options = cam->camera->options();
+  if (cam->camera->unplugged()) return complete_ioctl(client, -1, ENODEV);
 
   switch (request) {
-    case VIDIOC_QUERYCAP: {
-      UMockdevIoctlData* d = resolve(sizeof(v4l2_capability));
-      auto* cap = view<v4l2_capability>(d);
-      std::memset(cap, 0, sizeof *cap);
-      std::snprintf(reinterpret_cast<char*>(cap->driver), sizeof cap->driver, "uvcvideo");
-      std::snprintf(reinterpret_cast<char*>(cap->card), sizeof cap->card, "%s",
-                    options.card.c_str());
-      std::snprintf(reinterpret_cast<char*>(cap->bus_info), sizeof cap->bus_info, "%s",
-                    options.bus_info.c_str());
-      cap->version = 0x00060100;
-      cap->device_caps = V4L2_CAP_VIDEO_CAPTURE | V4L2_CAP_STREAMING;
-      cap->capabilities = cap->device_caps | V4L2_CAP_DEVICE_CAPS;
-      umockdev_ioctl_data_unref(d);
-      return done(0, 0);
-    }
-    case VIDIOC_ENUM_FMT: {
-      UMockdevIoctlData* d = resolve(sizeof(v4l2_fmtdesc));
-      auto* f = view<v4l2_fmtdesc>(d);
-      const std::uint32_t i = f->index;
-      const bool ok = f->type == V4L2_BUF_TYPE_VIDEO_CAPTURE && i < options.formats.size();
-      if (ok) {
-        f->pixelformat = to_fourcc(options.formats[i]);
-        f->flags = options.formats[i] == SimPixelFormat::Mjpeg ? V4L2_FMT_FLAG_COMPRESSED : 0;
-        std::snprintf(reinterpret_cast<char*>(f->description), sizeof f->description, "%s",
-                      options.formats[i] == SimPixelFormat::Mjpeg  ? "Motion-JPEG"
-                      : options.formats[i] == SimPixelFormat::Yuyv ? "YUYV 4:2:2"
-                                                                   : "24-bit RGB 8-8-8");
-      }
-      umockdev_ioctl_data_unref(d);
-      return done(ok ? 0 : -1, ok ? 0 : EINVAL);
-    }
+    case VIDIOC_QUERYCAP:
+      return answer_querycap(*cam, client, arg);
+    case VIDIOC_ENUM_FMT:
+      return answer_enum_fmt(*cam, client, arg);
     case VIDIOC_G_FMT:
     case VIDIOC_S_FMT:
-    case VIDIOC_TRY_FMT: {
-      UMockdevIoctlData* d = resolve(sizeof(v4l2_format));
-      auto* f = view<v4l2_format>(d);
-      if (f->type != V4L2_BUF_TYPE_VIDEO_CAPTURE) {
-        umockdev_ioctl_data_unref(d);
-        return done(-1, EINVAL);
-      }
-      if (request != VIDIOC_G_FMT) {
-        // Another process streaming from the camera (CameraFaults::busy), or this one already
-        // streaming: uvcvideo refuses a format change with EBUSY.
-        if (request == VIDIOC_S_FMT && (cam->streaming || options.faults.busy)) {
-          umockdev_ioctl_data_unref(d);
-          return done(-1, EBUSY);
-        }
-        // Like uvcvideo: an unknown format falls back to the first one, the size to the
-        // sensor's (the simulated sensor has one mode).
-        SimPixelFormat chosen = options.formats.front();
-        for (auto candidate : options.formats)
-          if (to_fourcc(candidate) == f->fmt.pix.pixelformat) chosen = candidate;
-        if (request == VIDIOC_S_FMT) cam->format = chosen;
-        CameraEmulation tmp_view;
-        tmp_view.camera = cam->camera;
-        tmp_view.format = chosen;
-        fill_pix(tmp_view, f->fmt.pix);
-      } else {
-        fill_pix(*cam, f->fmt.pix);
-      }
-      umockdev_ioctl_data_unref(d);
-      return done(0, 0);
-    }
+    case VIDIOC_TRY_FMT:
+      return answer_fmt(*cam, client, arg, request);
     case VIDIOC_G_PARM:
-    case VIDIOC_S_PARM: {
-      UMockdevIoctlData* d = resolve(sizeof(v4l2_streamparm));
-      auto* p = view<v4l2_streamparm>(d);
-      if (request == VIDIOC_S_PARM && p->parm.capture.timeperframe.denominator > 0) {
-        // The simulated sensor runs at its own rate whatever is asked, as many webcams do.
-      }
-      p->parm.capture.capability = V4L2_CAP_TIMEPERFRAME;
-      p->parm.capture.timeperframe.numerator = 1000;
-      p->parm.capture.timeperframe.denominator =
-          static_cast<std::uint32_t>(std::lround(options.fps * 1000));
-      umockdev_ioctl_data_unref(d);
-      return done(0, 0);
-    }
+    case VIDIOC_S_PARM:
+      return answer_parm(*cam, client, arg, request);
     case VIDIOC_S_CTRL:
-    case VIDIOC_G_CTRL: {
-      UMockdevIoctlData* d = resolve(sizeof(v4l2_control));
-      auto* c = view<v4l2_control>(d);
-      const bool known = c->id == V4L2_CID_EXPOSURE_AUTO || c->id == V4L2_CID_EXPOSURE_ABSOLUTE ||
-                         c->id == V4L2_CID_GAIN || c->id == V4L2_CID_BRIGHTNESS;
-      if (known) {
-        if (request == VIDIOC_S_CTRL)
-          cam->controls[c->id] = c->value;
-        else
-          c->value = cam->controls[c->id];
-      }
-      umockdev_ioctl_data_unref(d);
-      return done(known ? 0 : -1, known ? 0 : EINVAL);
-    }
-    case VIDIOC_REQBUFS: {
-      UMockdevIoctlData* d = resolve(sizeof(v4l2_requestbuffers));
-      auto* r = view<v4l2_requestbuffers>(d);
-      if (r->memory != V4L2_MEMORY_MMAP && r->memory != V4L2_MEMORY_USERPTR) {
-        umockdev_ioctl_data_unref(d);
-        return done(-1, EINVAL);
-      }
-      cam->memory = r->memory;
-      r->count = std::min<std::uint32_t>(r->count, 32);
-      cam->slots.assign(r->count, {});
-      cam->queue.clear();
-      r->capabilities = V4L2_BUF_CAP_SUPPORTS_MMAP | V4L2_BUF_CAP_SUPPORTS_USERPTR;
-      umockdev_ioctl_data_unref(d);
-      return done(0, 0);
-    }
-    case VIDIOC_QUERYBUF: {
-      UMockdevIoctlData* d = resolve(sizeof(v4l2_buffer));
-      auto* b = view<v4l2_buffer>(d);
-      if (b->index >= cam->slots.size()) {
-        umockdev_ioctl_data_unref(d);
-        return done(-1, EINVAL);
-      }
-      v4l2_pix_format pix{};
-      fill_pix(*cam, pix);
-      b->length = pix.sizeimage;
-      b->memory = cam->memory;
-      if (cam->memory == V4L2_MEMORY_MMAP)
-        b->m.offset = b->index * ((pix.sizeimage + 4095) & ~4095u);
-      umockdev_ioctl_data_unref(d);
-      return done(0, 0);
-    }
-    case VIDIOC_QBUF: {
-      UMockdevIoctlData* d = resolve(sizeof(v4l2_buffer));
-      auto* b = view<v4l2_buffer>(d);
-      if (b->index >= cam->slots.size() || b->memory != cam->memory ||
-          cam->slots[b->index].queued) {
-        umockdev_ioctl_data_unref(d);
-        return done(-1, EINVAL);
-      }
-      auto& slot = cam->slots[b->index];
-      if (cam->memory == V4L2_MEMORY_USERPTR) {
-        v4l2_pix_format pix{};
-        fill_pix(*cam, pix);
-        if (b->m.userptr == 0 || b->length < pix.sizeimage) {
-          umockdev_ioctl_data_unref(d);
-          return done(-1, EINVAL);
-        }
-        slot.userptr = b->m.userptr;
-        slot.length = b->length;
-      }
-      slot.queued = true;
-      cam->queue.push_back(b->index);
-      umockdev_ioctl_data_unref(d);
-      return done(0, 0);
-    }
-    case VIDIOC_DQBUF: {
-      if (!cam->streaming) return done(-1, EINVAL);
-      if (cam->queue.empty()) return done(-1, EAGAIN);
-      if (cam->memory != V4L2_MEMORY_USERPTR) return done(-1, EAGAIN);  // see file comment
-      const SimCamera::Capture c = cam->camera->capture(cam->format);
-      if (c.status == SimCamera::Capture::Status::NotReady) return done(-1, EAGAIN);
-      if (c.status == SimCamera::Capture::Status::Unplugged) return done(-1, ENODEV);
-      if (c.status == SimCamera::Capture::Status::Eio) return done(-1, EIO);
-      const unsigned index = cam->queue.front();
-      cam->queue.pop_front();
-      auto& slot = cam->slots[index];
-      slot.queued = false;
-      UMockdevIoctlData* d = resolve(sizeof(v4l2_buffer));
-      auto* b = view<v4l2_buffer>(d);
-      b->index = index;
-      b->memory = V4L2_MEMORY_USERPTR;
-      b->m.userptr = slot.userptr;
-      b->length = slot.length;
-      const std::size_t n = std::min<std::size_t>(c.bytes.size(), slot.length);
-      UMockdevIoctlData* payload =
-          umockdev_ioctl_data_resolve(d, offsetof(v4l2_buffer, m.userptr), slot.length, nullptr);
-      std::memcpy(payload->data, c.bytes.data(), n);
-      b = view<v4l2_buffer>(d);
-      b->bytesused = static_cast<std::uint32_t>(n);
-      b->sequence = c.sequence;
-      b->flags = V4L2_BUF_FLAG_DONE | V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
-      b->field = V4L2_FIELD_NONE;
-      b->timestamp.tv_sec = static_cast<long>(c.timestamp_s);
-      b->timestamp.tv_usec = static_cast<long>((c.timestamp_s - std::floor(c.timestamp_s)) * 1e6);
-      umockdev_ioctl_data_unref(payload);
-      umockdev_ioctl_data_unref(d);
-      return done(0, 0);
-    }
+    case VIDIOC_G_CTRL:
+      return answer_ctrl(*cam, client, arg, request);
+    case VIDIOC_REQBUFS:
+      return answer_reqbufs(*cam, client, arg);
+    case VIDIOC_QUERYBUF:
+      return answer_querybuf(*cam, client, arg);
+    case VIDIOC_QBUF:
+      return answer_qbuf(*cam, client, arg);
+    case VIDIOC_DQBUF:
+      return answer_dqbuf(*cam, client, arg);
     case VIDIOC_STREAMON:
-      if (cam->slots.empty()) return done(-1, EINVAL);
-      cam->streaming = true;
-      cam->camera->start_streaming();
-      return done(0, 0);
+      return answer_streamon(*cam, client);
     case VIDIOC_STREAMOFF:
-      cam->streaming = false;
-      cam->queue.clear();
-      for (auto& s : cam->slots) s.queued = false;
-      return done(0, 0);
+      return answer_streamoff(*cam, client);
     default:
       return FALSE;
   }
