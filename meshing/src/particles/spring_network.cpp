@@ -1349,6 +1349,34 @@ struct SpringNetwork::Impl {
       if (verts[v].alive && verts[v].faces.empty()) kill_vertex(v);
     return true;
   }
+
+  // ---- One step() of the network, in its order (defined next to SpringNetwork::step) ------
+  struct StepCandidates {
+    std::vector<std::uint64_t> special_short;    // §4.4 Step 2
+    std::vector<std::uint64_t> rule_candidates;  // Rules 1-2
+  };
+  void start_step(const ImplicitSurface& surface);
+  double stable_time_step() const;
+  void mark_topology_change(const ImplicitSurface& surface, StepReport& rep);
+  std::vector<Vector3d> spring_forces() const;
+  std::unordered_map<int, Vector3d> border_slide_directions() const;
+  void move_particles(const std::vector<Vector3d>& force,
+                      const std::unordered_map<int, Vector3d>& border_dir, double dt,
+                      double surface_time_step, StepReport& rep);
+  Vector3d driving_force(std::size_t i, const std::vector<Vector3d>& force,
+                         const std::unordered_map<int, Vector3d>& border_dir) const;
+  void keep_triangles_unturned(int i, const Vector3d& g, double g2, Vector3d& move) const;
+  static void damp_reversing_move(Vertex& v, Vector3d& move);
+  StepCandidates step_candidates() const;
+  void collapse_short_special_springs(const std::vector<std::uint64_t>& special_short,
+                                      StepReport& rep);
+  void collapse_or_split_springs(const std::vector<std::uint64_t>& rule_candidates,
+                                 const ImplicitSurface& surface, StepReport& rep);
+  void flip_unmarked_springs(StepReport& rep);
+  void remove_valence_three_particles(StepReport& rep);
+  void cut_qualifying_rings(const ImplicitSurface& surface, StepReport& rep);
+  void drop_lost_particles(const ImplicitSurface& surface, StepReport& rep);
+  void store_old_lengths();
 };
 
 SpringNetwork::SpringNetwork(const Mesh& start, const ParticleOptions& options)
@@ -1383,36 +1411,40 @@ SpringNetwork::~SpringNetwork() = default;
 SpringNetwork::SpringNetwork(SpringNetwork&&) noexcept = default;
 SpringNetwork& SpringNetwork::operator=(SpringNetwork&&) noexcept = default;
 
-StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_time_step) {
-  Impl& m = *impl_;
-  const ParticleOptions& o = m.o;
-  StepReport rep;
-  ++m.iter;
-  if (m.dead_faces > m.faces.size() / 2 || m.dead_verts > m.verts.size() / 2) m.compact();
-  m.evaluate_all(surface);
+// ---- SpringNetwork::step and its parts, in the order step() runs them ---------------------
 
-  // Time step: the explicit Euler step stays non-oscillating for the stiffest local mode of
-  // eq. (12) (stiffness ~ rho * valence), so dt = factor / (rho * max valence).
+// Counts the step, compacts storage that is more than half dead and evaluates F everywhere.
+void SpringNetwork::Impl::start_step(const ImplicitSurface& surface) {
+  ++iter;
+  if (dead_faces > faces.size() / 2 || dead_verts > verts.size() / 2) compact();
+  evaluate_all(surface);
+}
+
+// Time step: the explicit Euler step stays non-oscillating for the stiffest local mode of
+// eq. (12) (stiffness ~ rho * valence), so dt = factor / (rho * max valence).
+double SpringNetwork::Impl::stable_time_step() const {
   std::size_t max_valence = 6;
-  for (const Vertex& v : m.verts)
+  for (const Vertex& v : verts)
     if (v.alive) max_valence = std::max(max_valence, v.faces.size());
-  const double dt = o.time_step_factor / (o.rho * static_cast<double>(max_valence));
-  rep.time_step = dt;
+  return o.time_step_factor / (o.rho * static_cast<double>(max_valence));
+}
 
-  if (o.adaptive) m.adapt_rest_lengths();
-  if (o.topology_change) {
-    rep.new_topology_marks = m.mark_gap_springs(surface);
-    // Step 2: special springs shrink gradually towards special_factor * R_e (the report
-    // gives no rate; a sudden drop would make eq. 12 explode).
-    for (auto& [k, s] : m.springs)
-      if (s.special) s.rest = std::max(o.special_factor * m.R(), 0.7 * s.rest);
-  }
+// §4.4 Steps 1-2: marks the springs across a gap of F (with their special springs), then
+// constricts the special springs.
+void SpringNetwork::Impl::mark_topology_change(const ImplicitSurface& surface, StepReport& rep) {
+  rep.new_topology_marks = mark_gap_springs(surface);
+  // Step 2: special springs shrink gradually towards special_factor * R_e (the report
+  // gives no rate; a sudden drop would make eq. 12 explode).
+  for (auto& [k, s] : springs)
+    if (s.special) s.rest = std::max(o.special_factor * R(), 0.7 * s.rest);
+}
 
-  // Eq. (12)-(13): P_i = sum_j r_ij rho (R_e - |r_ij|) / R_e over the one-ring.
-  std::vector<Vector3d> force(m.verts.size(), Vector3d::Zero());
-  for (const auto& [k, s] : m.springs) {
+// Eq. (12)-(13): P_i = sum_j r_ij rho (R_e - |r_ij|) / R_e over the one-ring.
+std::vector<Vector3d> SpringNetwork::Impl::spring_forces() const {
+  std::vector<Vector3d> force(verts.size(), Vector3d::Zero());
+  for (const auto& [k, s] : springs) {
     const int a = key_lo(k), b = key_hi(k);
-    const Vector3d r = m.P(a) - m.P(b);
+    const Vector3d r = P(a) - P(b);
     const double l = r.norm();
     // Eq. (12) with an optional stiffening for moderate strains (an addition,
     // docs/particles.md): S = rho x (1 + min(k x^2, 1/3)), x = (R_e - |r|) / R_e. It spreads the
@@ -1423,36 +1455,39 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
     force[a] += sij * r;
     force[b] -= sij * r;
   }
-  // Border particles (scan mode) slide along their border: the spring force is reduced to its
-  // component along the chord of the two border neighbours (decision 19).
+  return force;
+}
+
+// Border particles (scan mode) slide along their border: the spring force is reduced to its
+// component along the chord of the two border neighbours (decision 19).
+std::unordered_map<int, Vector3d> SpringNetwork::Impl::border_slide_directions() const {
   std::unordered_map<int, Vector3d> border_dir;
-  for (std::size_t i = 0; i < m.verts.size(); ++i) {
-    const Vertex& v = m.verts[i];
+  for (std::size_t i = 0; i < verts.size(); ++i) {
+    const Vertex& v = verts[i];
     if (!v.alive || !v.boundary) continue;
     std::vector<int> ends;
-    for (int x : m.neighbors(static_cast<int>(i)))
-      if (m.edge_faces(static_cast<int>(i), x).size() == 1) ends.push_back(x);
+    for (int x : neighbors(static_cast<int>(i)))
+      if (edge_faces(static_cast<int>(i), x).size() == 1) ends.push_back(x);
     if (ends.size() != 2) continue;
-    const Vector3d d = m.P(ends[1]) - m.P(ends[0]);
+    const Vector3d d = P(ends[1]) - P(ends[0]);
     if (d.norm() > 0.0) border_dir.emplace(static_cast<int>(i), d.normalized());
   }
-  // Eq. (8) and (11): constraint velocity with feedback phi; phi * dt = 1 (one Newton step).
-  const double cap = o.max_step * m.R();
-  for (std::size_t i = 0; i < m.verts.size(); ++i) {
-    Vertex& v = m.verts[i];
+  return border_dir;
+}
+
+// Eq. (8) and (11): constraint velocity with feedback phi; phi * dt = 1 (one Newton step).
+void SpringNetwork::Impl::move_particles(const std::vector<Vector3d>& force,
+                                         const std::unordered_map<int, Vector3d>& border_dir,
+                                         double dt, double surface_time_step, StepReport& rep) {
+  const double cap = o.max_step * R();
+  for (std::size_t i = 0; i < verts.size(); ++i) {
+    Vertex& v = verts[i];
     // Gap: a particle where F is undefined waits (in scan mode, for ring_patience steps;
     // then it is removed, decision 43).
     if (!v.alive || !v.defined) continue;
     const Vector3d g = v.f.gradient;
     const double g2 = g.squaredNorm();
-    // Decision 44: in calming, a particle the untangling had to move back again and again
-    // (a rough surface whose gradient turns within a spring's length: the springs push it
-    // into a turned position, the untangling takes it out) keeps only the constraint part.
-    const bool settled = m.calming_ && v.untangled >= kUntanglesBeforeSettling;
-    Vector3d p_target = v.boundary || settled ? Vector3d::Zero() : force[i];
-    if (v.boundary)
-      if (const auto it = border_dir.find(static_cast<int>(i)); it != border_dir.end())
-        p_target = force[i].dot(it->second) * it->second;
+    const Vector3d p_target = driving_force(i, force, border_dir);
     Vector3d move = dt * p_target;
     if (g2 > 1e-20) {
       rep.max_constraint = std::max(rep.max_constraint, std::abs(v.f.value) / std::sqrt(g2));
@@ -1462,125 +1497,196 @@ StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_ti
     }
     const double len = move.norm();
     if (len > cap) move *= cap / len;
-    // Gap decisions 35 and 39: a move may not turn one of the particle's triangles over
-    // (normal against the outward gradient). At a border (scan mode) the border is free on
-    // one side, so nothing else stops a particle next to it from crossing a border edge; in
-    // the interior, the explicit Euler step plus the constraint's projection turned a few
-    // triangles over where the surface moves fast (the caps of two blobs pulled apart:
-    // 16-34 crossing face pairs per frame), and nothing turned them back.
-    if (g2 > 1e-20 && !m.keeps_orientation(static_cast<int>(i), v.p + move, g)) {
-      Vector3d tangential = move - g.dot(move) / g2 * g;
-      const Vector3d normal_part = move - tangential;
-      move = Vector3d::Zero();
-      for (int h = 0; h < 4; ++h, tangential *= 0.5)
-        if (m.keeps_orientation(static_cast<int>(i), v.p + normal_part + tangential, g)) {
-          move = normal_part + tangential;
-          break;
-        }
-    }
-    if (m.calming_) {
-      // Decision 44: a move that turns back on the previous one (a 2-cycle of the Newton step
-      // between two bumps of a rough surface) is damped, more each time it happens again.
-      const bool reverses = move.dot(v.last_move) < -0.5 * move.norm() * v.last_move.norm();
-      v.damping = reverses ? std::max(v.damping * 0.5, 1.0 / 64) : std::min(1.0, v.damping * 1.25);
-      v.last_move = move;
-      move *= v.damping;
-    }
+    keep_triangles_unturned(static_cast<int>(i), g, g2, move);
+    if (calming_) damp_reversing_move(v, move);
     v.p += move;
   }
+}
 
-  m.untangle_turned_faces(surface);
+// The spring force on particle i that drives its move: along the border chord for a border
+// particle, none for a settled one.
+Vector3d SpringNetwork::Impl::driving_force(
+    std::size_t i, const std::vector<Vector3d>& force,
+    const std::unordered_map<int, Vector3d>& border_dir) const {
+  const Vertex& v = verts[i];
+  // Decision 44: in calming, a particle the untangling had to move back again and again
+  // (a rough surface whose gradient turns within a spring's length: the springs push it
+  // into a turned position, the untangling takes it out) keeps only the constraint part.
+  const bool settled = calming_ && v.untangled >= kUntanglesBeforeSettling;
+  Vector3d p_target = v.boundary || settled ? Vector3d::Zero() : force[i];
+  if (v.boundary)
+    if (const auto it = border_dir.find(static_cast<int>(i)); it != border_dir.end())
+      p_target = force[i].dot(it->second) * it->second;
+  return p_target;
+}
 
-  // Candidates of Step 2 and Rules 1-2 from one sequential pass over the springs (a spring
-  // whose length an operation of this step changes is marked by it, so nothing is missed
-  // that Rule 3 would not block anyway), processed in key order.
+// Gap decisions 35 and 39: a move may not turn one of the particle's triangles over
+// (normal against the outward gradient). At a border (scan mode) the border is free on
+// one side, so nothing else stops a particle next to it from crossing a border edge; in
+// the interior, the explicit Euler step plus the constraint's projection turned a few
+// triangles over where the surface moves fast (the caps of two blobs pulled apart:
+// 16-34 crossing face pairs per frame), and nothing turned them back.
+void SpringNetwork::Impl::keep_triangles_unturned(int i, const Vector3d& g, double g2,
+                                                  Vector3d& move) const {
+  if (g2 > 1e-20 && !keeps_orientation(i, P(i) + move, g)) {
+    Vector3d tangential = move - g.dot(move) / g2 * g;
+    const Vector3d normal_part = move - tangential;
+    move = Vector3d::Zero();
+    for (int h = 0; h < 4; ++h, tangential *= 0.5)
+      if (keeps_orientation(i, P(i) + normal_part + tangential, g)) {
+        move = normal_part + tangential;
+        break;
+      }
+  }
+}
+
+// Decision 44: a move that turns back on the previous one (a 2-cycle of the Newton step
+// between two bumps of a rough surface) is damped, more each time it happens again.
+void SpringNetwork::Impl::damp_reversing_move(Vertex& v, Vector3d& move) {
+  const bool reverses = move.dot(v.last_move) < -0.5 * move.norm() * v.last_move.norm();
+  v.damping = reverses ? std::max(v.damping * 0.5, 1.0 / 64) : std::min(1.0, v.damping * 1.25);
+  v.last_move = move;
+  move *= v.damping;
+}
+
+// Candidates of Step 2 and Rules 1-2 from one sequential pass over the springs (a spring
+// whose length an operation of this step changes is marked by it, so nothing is missed
+// that Rule 3 would not block anyway), processed in key order.
+SpringNetwork::Impl::StepCandidates SpringNetwork::Impl::step_candidates() const {
   std::vector<std::uint64_t> special_short, rule_candidates;
-  for (const auto& [k, s] : m.springs) {
-    const double l = m.length(key_lo(k), key_hi(k));
-    if (s.special && l < o.special_min_length * m.R()) special_short.push_back(k);
+  for (const auto& [k, s] : springs) {
+    const double l = length(key_lo(k), key_hi(k));
+    if (s.special && l < o.special_min_length * R()) special_short.push_back(k);
     if (l < o.d_min * s.rest || (l > o.d_max * s.rest && !s.topo && !s.special))
       rule_candidates.push_back(k);
   }
   std::sort(special_short.begin(), special_short.end());
   std::sort(rule_candidates.begin(), rule_candidates.end());
+  return {std::move(special_short), std::move(rule_candidates)};
+}
 
-  // §4.4 Step 2: special springs that became short are removed (collapsed, Rule 1).
-  if (o.topology_change)
-    for (std::uint64_t k : special_short) {
-      const auto it = m.springs.find(k);
-      if (it == m.springs.end() || !it->second.special) continue;
-      const int a = key_lo(k), b = key_hi(k);
-      if (!m.verts[a].alive || !m.verts[b].alive) continue;
-      if (m.length(a, b) < o.special_min_length * m.R() && m.try_collapse(a, b))
-        ++rep.special_collapses;
-    }
+// §4.4 Step 2: special springs that became short are removed (collapsed, Rule 1).
+void SpringNetwork::Impl::collapse_short_special_springs(
+    const std::vector<std::uint64_t>& special_short, StepReport& rep) {
+  for (std::uint64_t k : special_short) {
+    const auto it = springs.find(k);
+    if (it == springs.end() || !it->second.special) continue;
+    const int a = key_lo(k), b = key_hi(k);
+    if (!verts[a].alive || !verts[b].alive) continue;
+    if (length(a, b) < o.special_min_length * R() && try_collapse(a, b)) ++rep.special_collapses;
+  }
+}
 
-
-  // Rules 1-4: collapse (14) / split (15) settled (16), unmarked (Rule 3) springs.
-  if (m.rules_frozen_) rule_candidates.clear();
+// Rules 1-4: collapse (14) / split (15) settled (16), unmarked (Rule 3) springs.
+void SpringNetwork::Impl::collapse_or_split_springs(
+    const std::vector<std::uint64_t>& rule_candidates, const ImplicitSurface& surface,
+    StepReport& rep) {
   for (std::uint64_t k : rule_candidates) {
-    const auto it = m.springs.find(k);
-    if (it == m.springs.end()) continue;
+    const auto it = springs.find(k);
+    if (it == springs.end()) continue;
     const Spring s = it->second;
     const int a = key_lo(k), b = key_hi(k);
-    if (m.marked(s)) continue;
-    const double l = m.length(a, b);
+    if (marked(s)) continue;
+    const double l = length(a, b);
     if (std::abs(s.old_length - l) > o.moving_epsilon * s.rest) continue;  // still moving
     if (l < o.d_min * s.rest) {
-      if (m.try_collapse(a, b)) ++rep.collapses;
+      if (try_collapse(a, b)) ++rep.collapses;
     } else if (l > o.d_max * s.rest && !s.topo && !s.special) {
-      if (m.try_split(a, b, surface)) ++rep.splits;
+      if (try_split(a, b, surface)) ++rep.splits;
     }
   }
+}
 
-  // Flips depend on valences (and, weakly, on angles): a pass after a step that changed
-  // nothing is repeated only every 10th step.
-  if (o.flips && (m.last_changed_ || rep.changed() || m.iter % 10 == 0)) {
-    const std::vector<std::uint64_t> keys = m.sorted_keys();
-    for (std::uint64_t k : keys) {
-      const auto it = m.springs.find(k);
-      if (it == m.springs.end() || m.marked(it->second) || it->second.topo) continue;
-      if (m.try_flip(key_lo(k), key_hi(k))) ++rep.flips;
-    }
+// One valence-improving flip pass over the unmarked, non-topological springs in key order.
+void SpringNetwork::Impl::flip_unmarked_springs(StepReport& rep) {
+  const std::vector<std::uint64_t> keys = sorted_keys();
+  for (std::uint64_t k : keys) {
+    const auto it = springs.find(k);
+    if (it == springs.end() || marked(it->second) || it->second.topo) continue;
+    if (try_flip(key_lo(k), key_hi(k))) ++rep.flips;
   }
+}
 
-  if (o.flips) {
-    // Valence-3 particles cannot be repaired by flips (a flip never lowers the valence of a
-    // vertex below 4 here); remove them by collapsing their shortest spring.
-    for (std::size_t i = 0; i < m.verts.size(); ++i) {
-      const int v = static_cast<int>(i);
-      if (!m.verts[i].alive || m.verts[i].boundary || m.verts[i].faces.size() != 3) continue;
-      auto ring = m.neighbors(v);
-      std::sort(ring.begin(), ring.end(),
-                [&](int x, int y) { return m.length(v, x) < m.length(v, y); });
-      for (int x : ring) {
-        if (m.marked(m.spring(v, x))) continue;
-        if (m.try_collapse(v, x)) {
-          ++rep.collapses;
-          break;
-        }
+// Valence-3 particles cannot be repaired by flips (a flip never lowers the valence of a
+// vertex below 4 here); remove them by collapsing their shortest spring.
+void SpringNetwork::Impl::remove_valence_three_particles(StepReport& rep) {
+  for (std::size_t i = 0; i < verts.size(); ++i) {
+    const int v = static_cast<int>(i);
+    if (!verts[i].alive || verts[i].boundary || verts[i].faces.size() != 3) continue;
+    auto ring = neighbors(v);
+    std::sort(ring.begin(), ring.end(), [&](int x, int y) { return length(v, x) < length(v, y); });
+    for (int x : ring) {
+      if (marked(spring(v, x))) continue;
+      if (try_collapse(v, x)) {
+        ++rep.collapses;
+        break;
       }
     }
   }
-  if (o.topology_change && m.any_topo_) {
-    m.evaluate_all(surface);
-    const int before = m.fallback_cuts_;
-    const int c = m.cut_rings(surface);
-    if (m.fallback_cuts_ > before)
-      rep.fallback_cuts += c;
-    else
-      rep.cuts += c;
-  }
+}
 
-  if (o.topology_change && m.any_topo_ && m.remove_lost_particles(surface) > 0) ++rep.fallback_cuts;
-  if (!o.topology_change && m.has_border_ && m.open_holes_at_lost_particles() > 0)
-    ++rep.fallback_cuts;
+// §4.4 Step 3 on freshly evaluated particles; a fallback cut (a persisting band removed
+// wholesale) is reported apart from the clean ring cuts.
+void SpringNetwork::Impl::cut_qualifying_rings(const ImplicitSurface& surface, StepReport& rep) {
+  evaluate_all(surface);
+  const int before = fallback_cuts_;
+  const int c = cut_rings(surface);
+  if (fallback_cuts_ > before)
+    rep.fallback_cuts += c;
+  else
+    rep.cuts += c;
+}
+
+// Particles that stay lost: removed and their holes closed by fans (topology change, decision
+// 25), or, in scan mode, removed and their holes left open (decision 43).
+void SpringNetwork::Impl::drop_lost_particles(const ImplicitSurface& surface, StepReport& rep) {
+  if (o.topology_change && any_topo_ && remove_lost_particles(surface) > 0) ++rep.fallback_cuts;
+  if (!o.topology_change && has_border_ && open_holes_at_lost_particles() > 0) ++rep.fallback_cuts;
+}
+
+// |r|_alt of eq. (16) for the next step's "still moving" test.
+void SpringNetwork::Impl::store_old_lengths() {
+  for (auto& [k, s] : springs) s.old_length = length(key_lo(k), key_hi(k));
+}
+
+StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_time_step) {
+  Impl& m = *impl_;
+  const ParticleOptions& o = m.o;
+  StepReport rep;
+  m.start_step(surface);
+  const double dt = m.stable_time_step();
+  rep.time_step = dt;
+
+  if (o.adaptive) m.adapt_rest_lengths();
+  if (o.topology_change) m.mark_topology_change(surface, rep);
+
+  const std::vector<Vector3d> force = m.spring_forces();
+  const std::unordered_map<int, Vector3d> border_dir = m.border_slide_directions();
+  m.move_particles(force, border_dir, dt, surface_time_step, rep);
+
+  m.untangle_turned_faces(surface);
+
+  Impl::StepCandidates candidates = m.step_candidates();
+  if (o.topology_change) m.collapse_short_special_springs(candidates.special_short, rep);
+
+  if (m.rules_frozen_) candidates.rule_candidates.clear();
+  m.collapse_or_split_springs(candidates.rule_candidates, surface, rep);
+
+  // Flips depend on valences (and, weakly, on angles): a pass after a step that changed
+  // nothing is repeated only every 10th step.
+  if (o.flips && (m.last_changed_ || rep.changed() || m.iter % 10 == 0))
+    m.flip_unmarked_springs(rep);
+
+  if (o.flips) m.remove_valence_three_particles(rep);
+  if (o.topology_change && m.any_topo_) m.cut_qualifying_rings(surface, rep);
+
+  m.drop_lost_particles(surface, rep);
   if (rep.cuts + rep.fallback_cuts > 0) {
     m.evaluate_all(surface);
     m.untangle_turned_faces(surface);
   }
 
-  for (auto& [k, s] : m.springs) s.old_length = m.length(key_lo(k), key_hi(k));
+  m.store_old_lengths();
   m.last_changed_ = rep.changed();
   return rep;
 }
@@ -1761,7 +1867,6 @@ Mesh subdivide(const Mesh& m, const ImplicitSurface& surface) {
   }
   return out;
 }
-
 
 // Particles a closed mesh of near-equilateral triangles with edge `edge` needs on `area`:
 // F = 2 (V - chi) triangles of sqrt(3)/4 edge^2 each.
