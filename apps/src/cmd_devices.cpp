@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <thread>
+#include <tuple>
 
 #include "calibration_capture.h"
 #include "cli_support.h"
@@ -137,7 +138,17 @@ void validate_scan_args(const ScanArgs& a) {
   if (a.pose_wait_s != -1) require_in_range("--pose-wait", a.pose_wait_s, 0, 3600);
 }
 
-int run_scan(const ScanArgs& a) {
+// What a scan will record, from the arguments alone: checked before anything is opened.
+struct ScanPlan {
+  std::optional<CalibrationSessionInfo> cal_plan;  // a calibration session's poses
+  std::size_t planned_steps = 0;
+  int width = 0, height = 0;
+  drivers::PixelFormat format{};
+  FrameStorage storage{};
+};
+
+// Throws InvalidInputError for arguments no scan can run with (before any device is opened).
+ScanPlan plan_scan(const ScanArgs& a) {
   if (a.out.empty()) throw InvalidInputError("--out SESSION is required");
   validate_scan_args(a);
   if (a.sim == (!a.device.empty() || !a.board.empty()))
@@ -145,165 +156,193 @@ int run_scan(const ScanArgs& a) {
   if (!a.sim && (a.device.empty() || a.board.empty()))
     throw InvalidInputError("a hardware scan needs --device CAM and --board BOARD");
   if (!a.faults.empty() && !a.sim) throw InvalidInputError("--sim-fault needs --sim");
-  std::optional<CalibrationSessionInfo> cal_plan;
+  ScanPlan plan;
   if (a.calibration) {
     if (!a.scene.empty()) throw InvalidInputError("--calibration shows the board, not a --scene");
-    cal_plan = make_calibration_plan(a.cal);
+    plan.cal_plan = make_calibration_plan(a.cal);
   }
-  const std::size_t planned_steps =
-      cal_plan ? cal_plan->step_count() : static_cast<std::size_t>(a.steps);
-  const auto [width, height] = parse_frame_size(a.size);
-  const drivers::PixelFormat format =
+  plan.planned_steps =
+      plan.cal_plan ? plan.cal_plan->step_count() : static_cast<std::size_t>(a.steps);
+  std::tie(plan.width, plan.height) = parse_frame_size(a.size);
+  plan.format =
       drivers::parse_pixel_format(a.format.empty() ? (a.sim ? "rgb24" : "yuyv") : a.format);
   if (a.storage != "png" && a.storage != "mjpeg")
     throw InvalidInputError("--storage must be png or mjpeg");
-  const FrameStorage storage = a.storage == "png" ? FrameStorage::Png : FrameStorage::Mjpeg;
-  if (storage == FrameStorage::Mjpeg && format != drivers::PixelFormat::Mjpeg)
+  plan.storage = a.storage == "png" ? FrameStorage::Png : FrameStorage::Mjpeg;
+  if (plan.storage == FrameStorage::Mjpeg && plan.format != drivers::PixelFormat::Mjpeg)
     throw InvalidInputError("--storage mjpeg keeps the camera's MJPEG bytes: needs --format mjpeg");
+  return plan;
+}
 
-  // The session: new, or continued from its last complete step.
-  const fs::path out = a.out;
-  const bool existing = fs::exists(out / "session.json");
-  if (existing && !a.resume)
-    throw InvalidInputError("'" + out.string() + "' already holds a session; add --resume");
-  std::optional<SessionWriter> session;
-  double table_angle = 0;  // where the table stands now (the last complete step)
-  if (existing) {
-    session.emplace(SessionWriter::resume(out));
-    const SessionHeader& h = session->header();
-    if (h.calibration.has_value() != a.calibration)
-      throw InvalidInputError("--resume: '" + out.string() + "' is " +
-                              (h.calibration ? "a calibration session: add --calibration"
-                                             : "a scan session: drop --calibration"));
-    // A calibration session resumes with its own recorded plan (--poses etc. need not be given
-    // again).
-    if (h.calibration) cal_plan = h.calibration;
-    if ((!h.calibration && h.step_count != planned_steps) || h.laser_count != a.lasers ||
-        h.camera.width != width || h.camera.height != height || h.camera.format != format ||
-        h.storage != storage || h.simulated != a.sim)
-      throw InvalidInputError(
-          "--resume: steps, lasers, size, format, storage and --sim must "
-          "match the session in '" +
-          out.string() + "'");
-    // Every recorded frame is read back first: a damaged one is captured again (with all
-    // steps after it), never left for the replay to find.
-    if (const auto damage = SessionReader(out).first_damaged_step()) {
-      std::size_t from = damage->step;
-      if (h.calibration) from = h.calibration->first_step(h.calibration->step(from).first);
-      say() << "scan: step " << damage->step << " is damaged (" << damage->reason
-            << "); capturing again from step " << from << "\n";
-      result()["recaptured_from_step"] = from;
-      session->rewind(from);
-    }
-    if (h.calibration && !session->complete()) {
-      // The board may have moved while the scan was stopped: the interrupted pose starts over.
-      session->rewind(h.calibration->first_step(h.calibration->step(session->steps_done()).first));
-    }
-    if (session->complete()) {
-      say() << "scan: " << out.string() << " is already complete (" << h.step_count << " steps)\n";
-      result()["session"] = out.string();
-      result()["steps_done"] = h.step_count;
-      result()["already_complete"] = true;
-      return kSuccess;
-    }
-    if (session->steps_done() > 0) table_angle = h.step_angle(session->steps_done() - 1);
+// Throws unless the session in `out` was recorded as `a` and `plan` would record it now; a
+// resumed calibration session brings its own recorded plan.
+void adopt_resumed_session_plan(const SessionHeader& h, const ScanArgs& a, ScanPlan& plan,
+                                const fs::path& out) {
+  if (h.calibration.has_value() != a.calibration)
+    throw InvalidInputError("--resume: '" + out.string() + "' is " +
+                            (h.calibration ? "a calibration session: add --calibration"
+                                           : "a scan session: drop --calibration"));
+  // A calibration session resumes with its own recorded plan (--poses etc. need not be given
+  // again).
+  if (h.calibration) plan.cal_plan = h.calibration;
+  if ((!h.calibration && h.step_count != plan.planned_steps) || h.laser_count != a.lasers ||
+      h.camera.width != plan.width || h.camera.height != plan.height ||
+      h.camera.format != plan.format || h.storage != plan.storage || h.simulated != a.sim)
+    throw InvalidInputError(
+        "--resume: steps, lasers, size, format, storage and --sim must "
+        "match the session in '" +
+        out.string() + "'");
+}
+
+// Rewinds a resumed session to where capturing must start again.
+void rewind_to_first_step_to_capture(SessionWriter& session, const fs::path& out) {
+  const SessionHeader& h = session.header();
+  // Every recorded frame is read back first: a damaged one is captured again (with all
+  // steps after it), never left for the replay to find.
+  if (const auto damage = SessionReader(out).first_damaged_step()) {
+    std::size_t from = damage->step;
+    if (h.calibration) from = h.calibration->first_step(h.calibration->step(from).first);
+    say() << "scan: step " << damage->step << " is damaged (" << damage->reason
+          << "); capturing again from step " << from << "\n";
+    result()["recaptured_from_step"] = from;
+    session.rewind(from);
   }
+  if (h.calibration && !session.complete()) {
+    // The board may have moved while the scan was stopped: the interrupted pose starts over.
+    session.rewind(h.calibration->first_step(h.calibration->step(session.steps_done()).first));
+  }
+}
 
-  // Devices.
+int report_already_complete(const SessionHeader& h, const fs::path& out) {
+  say() << "scan: " << out.string() << " is already complete (" << h.step_count << " steps)\n";
+  result()["session"] = out.string();
+  result()["steps_done"] = h.step_count;
+  result()["already_complete"] = true;
+  return kSuccess;
+}
+
+// The camera of a scan and, in simulation, the device side behind the board and the camera.
+// The members are destroyed in reverse order: the simulated board (pty) last.
+struct ScanDevices {
   std::unique_ptr<sim::PtyBoard> pty;
   std::shared_ptr<sim::SimCamera> sim_camera;
   std::unique_ptr<drivers::Camera> camera;
   std::shared_ptr<SimCalibrationBoard> sim_board;
-  const double scale = a.sim ? a.time_scale : 1.0;
+};
+
+// The simulated board (behind a pty, its table at `table_angle`) and the simulated camera that
+// renders the scene, or the calibration board, as the simulated table and lasers stand.
+ScanDevices open_sim_devices(const ScanArgs& a, const ScanPlan& plan, double scale,
+                             double table_angle) {
+  ScanDevices d;
+  sim::SimBoardOptions bo;
+  bo.time_scale = scale;
+  bo.laser_count = std::max(a.lasers, 1);
+  bo.initial_angle_rad = table_angle;
+  sim::SimCameraOptions co;
+  co.width = plan.width;
+  co.height = plan.height;
+  co.fps = a.fps;
+  co.time_scale = scale;
+  for (const auto& f : a.faults) apply_sim_fault(f, bo, co);
+  d.pty = std::make_unique<sim::PtyBoard>(bo);
+  auto firmware = d.pty->shared_firmware();
+  if (plan.cal_plan)
+    d.sim_board = std::make_shared<SimCalibrationBoard>(*plan.cal_plan, plan.width, plan.height);
+  d.sim_camera = std::make_shared<sim::SimCamera>(
+      d.sim_board ? d.sim_board->renderer() : make_sim_renderer(a.scene, plan.width, plan.height),
+      [firmware] { return firmware->angle_rad(); }, [firmware] { return firmware->laser_mask(); },
+      co);
+  d.sim_camera->start_streaming();
+  d.camera = std::make_unique<SimCameraSource>(d.sim_camera, plan.format, 5.0);
+  return d;
+}
+
+std::unique_ptr<drivers::Camera> open_v4l2_camera(const ScanArgs& a, const ScanPlan& plan) {
+  drivers::CameraSettings cs;
+  cs.width = plan.width;
+  cs.height = plan.height;
+  cs.format = plan.format;
+  cs.fps = a.fps;
+  cs.io = a.io == "userptr" ? drivers::IoMethod::UserPtr : drivers::IoMethod::Mmap;
+  if (a.io != "mmap" && a.io != "userptr") throw InvalidInputError("--io must be mmap or userptr");
+  cs.buffer_count = a.buffers;
+  cs.exposure = a.exposure;
+  cs.gain = a.gain;
+  cs.brightness = a.brightness;
+  return std::make_unique<drivers::V4l2Camera>(a.device, cs);
+}
+
+drivers::BoardOptions scan_board_options(const ScanArgs& a) {
   drivers::BoardOptions board_options;
   board_options.feed_rate_deg_per_s = a.feed;
   if (a.sim) {
-    sim::SimBoardOptions bo;
-    bo.time_scale = scale;
-    bo.laser_count = std::max(a.lasers, 1);
-    bo.initial_angle_rad = table_angle;
-    sim::SimCameraOptions co;
-    co.width = width;
-    co.height = height;
-    co.fps = a.fps;
-    co.time_scale = scale;
-    for (const auto& f : a.faults) apply_sim_fault(f, bo, co);
-    pty = std::make_unique<sim::PtyBoard>(bo);
-    auto firmware = pty->shared_firmware();
-    if (cal_plan) sim_board = std::make_shared<SimCalibrationBoard>(*cal_plan, width, height);
-    sim_camera = std::make_shared<sim::SimCamera>(
-        sim_board ? sim_board->renderer() : make_sim_renderer(a.scene, width, height),
-        [firmware] { return firmware->angle_rad(); }, [firmware] { return firmware->laser_mask(); },
-        co);
-    sim_camera->start_streaming();
-    camera = std::make_unique<SimCameraSource>(sim_camera, format, 5.0);
     // The simulated board answers within microseconds, but a loaded machine (ctest -j, the
     // sanitizer job) can hold either process off the CPU for a while: timeouts well above
     // that, so that only a real fault (--sim-fault) ever lets one fire.
     board_options.banner_timeout = std::chrono::milliseconds(5000);
     board_options.command_timeout = std::chrono::milliseconds(3000);
     board_options.move_timeout_floor = std::chrono::milliseconds(3000);
-  } else {
-    drivers::CameraSettings cs;
-    cs.width = width;
-    cs.height = height;
-    cs.format = format;
-    cs.fps = a.fps;
-    cs.io = a.io == "userptr" ? drivers::IoMethod::UserPtr : drivers::IoMethod::Mmap;
-    if (a.io != "mmap" && a.io != "userptr")
-      throw InvalidInputError("--io must be mmap or userptr");
-    cs.buffer_count = a.buffers;
-    cs.exposure = a.exposure;
-    cs.gain = a.gain;
-    cs.brightness = a.brightness;
-    camera = std::make_unique<drivers::V4l2Camera>(a.device, cs);
   }
-  drivers::Board board(open_board_transport(a.sim ? pty->slave_path() : a.board, a.baud),
-                       drivers::make_horus_dialect(), board_options);
-  board.connect();
-  // A resumed scan continues where the table was left (docs/hardware.md).
-  if (session && session->steps_done() > 0) board.declare_position(table_angle);
+  return board_options;
+}
 
-  if (!session) {
-    SessionHeader h;
-    h.step_count = planned_steps;
-    h.calibration = cal_plan;
-    h.laser_count = a.lasers;
-    h.storage = storage;
-    h.settle_s = a.settle_s;
-    h.discard_frames = a.discard;
-    h.camera = camera->descriptor();
-    h.board_device = a.sim ? "sim:board" : board.device_name();
-    h.board_dialect = board.dialect().name();
-    h.board_firmware = board.firmware_banner();
-    h.simulated = a.sim;
-    if (a.sim) h.notes = "synthetic turntable renderer, time scale " + std::to_string(scale);
-    session.emplace(SessionWriter::create(out, h));
-  }
+// The header of a new session: the plan, and what the opened camera and board report.
+SessionHeader new_session_header(const ScanArgs& a, const ScanPlan& plan, double scale,
+                                 const drivers::Camera& camera, const drivers::Board& board) {
+  SessionHeader h;
+  h.step_count = plan.planned_steps;
+  h.calibration = plan.cal_plan;
+  h.laser_count = a.lasers;
+  h.storage = plan.storage;
+  h.settle_s = a.settle_s;
+  h.discard_frames = a.discard;
+  h.camera = camera.descriptor();
+  h.board_device = a.sim ? "sim:board" : board.device_name();
+  h.board_dialect = board.dialect().name();
+  h.board_firmware = board.firmware_banner();
+  h.simulated = a.sim;
+  if (a.sim) h.notes = "synthetic turntable renderer, time scale " + std::to_string(scale);
+  return h;
+}
 
-  Progress progress("scan");
+// `progress` must outlive the options: their progress callback updates it.
+CaptureOptions scan_capture_options(const ScanArgs& a, const ScanPlan& plan, double scale,
+                                    const std::shared_ptr<SimCalibrationBoard>& sim_board,
+                                    Progress& progress) {
   CaptureOptions options;
   options.settle_s = a.settle_s * scale;
   options.discard_frames = a.discard;
   if (sim_board) {
-    const CalibrationSessionInfo info = *cal_plan;
+    const CalibrationSessionInfo info = *plan.cal_plan;
     options.before_step = [sim_board, info](std::size_t step) {
       sim_board->set_pose(info.step(step).first);
     };
-  } else if (cal_plan) {
-    options.before_step = pose_prompter(*cal_plan, a.pose_wait_s);
+  } else if (plan.cal_plan) {
+    options.before_step = pose_prompter(*plan.cal_plan, a.pose_wait_s);
   }
-  options.progress = [&](std::size_t done, std::size_t total) {
+  options.progress = [&progress](std::size_t done, std::size_t total) {
     progress.update(static_cast<int>(done), static_cast<int>(total));
   };
   options.stop_requested = [] { return g_stop_requested.load(); };
+  return options;
+}
+
+// capture_steps with Ctrl-C and SIGTERM turned into a stop request (g_stop_requested).
+CaptureReport capture_until_done_or_stopped(SessionWriter& session, drivers::Board& board,
+                                            drivers::Camera& camera,
+                                            const CaptureOptions& options) {
   g_stop_requested = false;
   std::signal(SIGINT, request_scan_stop);
   std::signal(SIGTERM, request_scan_stop);
-  const CaptureReport report = capture_steps(*session, board, *camera, options);
+  CaptureReport report = capture_steps(session, board, camera, options);
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
-  progress.finish();
+  return report;
+}
+
+// Says how the capture ended and fills the JSON result; kStopped after a stop request.
+int report_capture(const CaptureReport& report, std::size_t planned_steps, const fs::path& out) {
   result()["session"] = out.string();
   result()["steps_done"] = report.steps_done;
   result()["steps_planned"] = planned_steps;
@@ -323,6 +362,50 @@ int run_scan(const ScanArgs& a) {
   result()["seconds"] = report.seconds;
   result()["dropped_frames"] = report.dropped_frames;
   return kSuccess;
+}
+
+int run_scan(const ScanArgs& a) {
+  ScanPlan plan = plan_scan(a);
+
+  // The session: new, or continued from its last complete step.
+  const fs::path out = a.out;
+  const bool existing = fs::exists(out / "session.json");
+  if (existing && !a.resume)
+    throw InvalidInputError("'" + out.string() + "' already holds a session; add --resume");
+  std::optional<SessionWriter> session;
+  double table_angle = 0;  // where the table stands now (the last complete step)
+  if (existing) {
+    session.emplace(SessionWriter::resume(out));
+    const SessionHeader& h = session->header();
+    adopt_resumed_session_plan(h, a, plan, out);
+    rewind_to_first_step_to_capture(*session, out);
+    if (session->complete()) return report_already_complete(h, out);
+    if (session->steps_done() > 0) table_angle = h.step_angle(session->steps_done() - 1);
+  }
+
+  // Devices.
+  const double scale = a.sim ? a.time_scale : 1.0;
+  ScanDevices devices;
+  if (a.sim)
+    devices = open_sim_devices(a, plan, scale, table_angle);
+  else
+    devices.camera = open_v4l2_camera(a, plan);
+  drivers::Board board(open_board_transport(a.sim ? devices.pty->slave_path() : a.board, a.baud),
+                       drivers::make_horus_dialect(), scan_board_options(a));
+  board.connect();
+  // A resumed scan continues where the table was left (docs/hardware.md).
+  if (session && session->steps_done() > 0) board.declare_position(table_angle);
+
+  if (!session)
+    session.emplace(
+        SessionWriter::create(out, new_session_header(a, plan, scale, *devices.camera, board)));
+
+  Progress progress("scan");
+  const CaptureOptions options = scan_capture_options(a, plan, scale, devices.sim_board, progress);
+  const CaptureReport report =
+      capture_until_done_or_stopped(*session, board, *devices.camera, options);
+  progress.finish();
+  return report_capture(report, plan.planned_steps, out);
 }
 
 Image8 downscale(const Image8& img, int factor) {
