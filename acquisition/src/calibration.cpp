@@ -8,6 +8,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <memory_resource>
 #include <numbers>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/utility.hpp>
@@ -375,13 +376,22 @@ class ScannerCalibrator {
   std::vector<LaserObs> laser_obs_;
   int n_corners_ = 0;
 
-  // Parameter blocks of the joint adjustment.
-  double in_[9] = {};                           // fx fy cx cy k1 k2 p1 p2 k3
-  std::vector<std::array<double, 6>> pose_;     // per index into `used_`: angle-axis, translation
-  double axis_p_[3] = {}, point_p_[3] = {};     // turntable axis: direction, point
-  std::vector<std::array<double, 6>> pose0s_;   // per placement: board pose at turntable angle 0
-  std::vector<std::array<double, 3>> lnormal_;  // per laser: plane normal . X = ldist_
-  std::vector<double> ldist_;
+  // Parameter blocks of the joint adjustment. Ceres' covariance orders the blocks by their
+  // addresses, so the sizes of its dense SVD's rounding errors depend on where the blocks lie:
+  // the variable-size ones come from one arena in a fixed order (with the general heap, their
+  // order followed the allocator's history and the uncertainties changed in the 14th digit
+  // from run to run). Each vector is sized once; the arena's first chunk holds them all.
+  double in_[9] = {};                        // fx fy cx cy k1 k2 p1 p2 k3
+  double axis_p_[3] = {}, point_p_[3] = {};  // turntable axis: direction, point
+  std::pmr::monotonic_buffer_resource parameter_arena_{
+      (2 * views_.size() * 6 + 4 * static_cast<std::size_t>(laser_count_)) * sizeof(double) + 1024};
+  // Per index into `used_`: angle-axis, translation.
+  std::pmr::vector<std::array<double, 6>> pose_{&parameter_arena_};
+  // Per placement: the board's pose at turntable angle 0.
+  std::pmr::vector<std::array<double, 6>> pose0s_{&parameter_arena_};
+  // Per laser: the plane normal . X = ldist_.
+  std::pmr::vector<std::array<double, 3>> lnormal_{&parameter_arena_};
+  std::pmr::vector<double> ldist_{&parameter_arena_};
 };
 
 void ScannerCalibrator::detect_corners(CalibrationReport& report) {
