@@ -31,8 +31,9 @@ struct Row {
 
 inline void print(const Row& r) {
   std::printf("%-36s %8.3f %9zu %9zu %8.2f %8.2f %7.3f %9.3f %9.3f\n", r.name, r.time_s, r.vertices,
-              r.triangles, r.q.min_angle_deg, 100 * (1 - r.q.fraction_min_angle_ge_30), r.q.mean_q,
-              r.q.hausdorff_mesh_to_surface_mm, r.q.hausdorff_surface_to_mesh_mm);
+              r.triangles, r.q.min_angle_deg, 100 * (1 - r.q.fraction_min_angle_ge_30),
+              r.q.mean_radius_ratio, r.q.hausdorff_mesh_to_surface_mm,
+              r.q.hausdorff_surface_to_mesh_mm);
 }
 
 inline double mean_edge(const Mesh& m) {

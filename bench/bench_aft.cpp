@@ -147,7 +147,7 @@ int main(int argc, char** argv) {
   }
 
   std::printf("%-36s %8s %9s %9s %8s %8s %7s %9s %9s\n", "method", "time_s", "vertices",
-              "triangles", "min_ang", "%<30deg", "mean_q", "H_m->s", "H_s->m");
+              "triangles", "min_ang", "%<30deg", "mean_rho", "H_m->s", "H_s->m");
   // 1. AFT, sample head (best of 3 runs for the time).
   aft::AnimationMesh am;
   const double best = build_best_of_3(g, lines, surface, settings, &am);
@@ -265,7 +265,8 @@ int main(int argc, char** argv) {
   print_lines_constrained(sm, band_pixels(sm, back, gm, grid.n_phi()), g, surface, edge,
                           cq.mesh.positions.size(), am.mesh.positions.size());
   std::printf("  ratios CGAL/AFT: time %.2f, vertices %.2f, mean q %.3f\n", t_cgal / aft_row.time_s,
-              double(cgal_row.vertices) / aft_row.vertices, cgal_row.q.mean_q / aft_row.q.mean_q);
+              double(cgal_row.vertices) / aft_row.vertices,
+              cgal_row.q.mean_radius_ratio / aft_row.q.mean_radius_ratio);
 
   bench_fine(lines, surface, settings);
   return 0;

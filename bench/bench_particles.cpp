@@ -4,7 +4,8 @@
 // vertex count; plus the per-frame update rate of a moving ~10,000-vertex mesh. Prints a
 // Markdown table (docs/benchmarks.md).
 //
-// q = 4 sqrt(3) A / (l1^2 + l2^2 + l3^2): 1 for an equilateral triangle, 0 for a degenerate one.
+// q: the mean ratio 4 sqrt(3) A / (l1^2 + l2^2 + l3^2) (core/triangle_quality.h): 1 for an
+// equilateral triangle, 0 for a degenerate one.
 // Distance: Newton projection distance to F = 0 of every vertex and every triangle centroid.
 // Last, scan mode on the full 512 x 512 sample head (issue 31): time, iterations, convergence.
 #include <CGAL/Complex_2_in_triangulation_3.h>
@@ -34,6 +35,7 @@
 #include "implicit_adapters.h"
 #include "scanmesh/acquisition/grid_cleaning.h"
 #include "scanmesh/acquisition/scan_cleaning.h"
+#include "scanmesh/core/triangle_quality.h"
 #include "scanmesh/meshing/mesh_topology.h"
 #include "scanmesh/meshing/particles/particles.h"
 #include "scanmesh/reconstruction/scan_surface.h"
@@ -67,9 +69,7 @@ void print_row(const Row& r, const particles::ImplicitSurface& s) {
   for (const auto& t : r.mesh.triangles) {
     const Vector3d a = r.mesh.positions[t[0]], b = r.mesh.positions[t[1]],
                    c = r.mesh.positions[t[2]];
-    const double area = 0.5 * (b - a).cross(c - a).norm();
-    const double l2 = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
-    q_sum += l2 > 0 ? 4 * std::sqrt(3.0) * area / l2 : 0;
+    q_sum += mean_ratio(a, b, c);
     double mn = 180;
     for (int k = 0; k < 3; ++k) {
       const Vector3d u = r.mesh.positions[t[(k + 1) % 3]] - r.mesh.positions[t[k]];

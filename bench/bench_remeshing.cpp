@@ -33,8 +33,9 @@ using bench::measure_remesh;
 
 void print(const Row& r) {
   std::printf("| %s | %.2f | %zu | %.2f | %.2f | %.3f | %.1f | %.3f | %.4f | %zu |\n",
-              r.method.c_str(), r.seconds, r.vertices, r.min_angle, 100 * r.ge30, r.mean_q,
-              100 * r.irregular, r.hausdorff, r.mean_dist, r.self_intersections);
+              r.method.c_str(), r.seconds, r.vertices, r.min_angle, 100 * r.ge30,
+              r.mean_aspect_ratio, 100 * r.irregular, r.hausdorff, r.mean_dist,
+              r.self_intersections);
 }
 
 void compare(const sim::ScannerConfig& cfg, int target, bool uniform_only) {
@@ -45,8 +46,7 @@ void compare(const sim::ScannerConfig& cfg, int target, bool uniform_only) {
   remeshing::PrepareStats ps;
   // The scan clean-up `scanmesh remesh` runs by default on such a mesh (looks_like_scan), at the
   // output's scale.
-  const Mesh in =
-      remeshing::prepare_input(raw, remeshing::scan_prepare_options(raw, target), &ps);
+  const Mesh in = remeshing::prepare_input(raw, remeshing::scan_prepare_options(raw, target), &ps);
   std::printf(
       "head grid mesh: %zu vertices, %zu triangles; prepared: %zu vertices, %zu triangles "
       "(%zu crumbs removed, %zu holes closed, %zu spike / %zu pinch / %zu border-tip faces "
@@ -55,7 +55,8 @@ void compare(const sim::ScannerConfig& cfg, int target, bool uniform_only) {
       ps.components_removed, ps.holes_filled, ps.spike_faces_removed, ps.pinch_faces_removed,
       ps.tip_faces_removed);
   std::printf(
-      "| method | time [s] | vertices | min angle [deg] | tri >= 30 deg [%%] | mean Q | "
+      "| method | time [s] | vertices | min angle [deg] | tri >= 30 deg [%%] | mean aspect ratio "
+      "R/2r | "
       "irregular valence [%%] | Hausdorff [mm] | mean dist [mm] | self-intersections |\n"
       "|---|---|---|---|---|---|---|---|---|---|\n");
   std::vector<Row> rows;
@@ -132,9 +133,10 @@ int main(int argc, char** argv) {
   const auto q = remeshing::evaluate_remesh(boxes, r, true);
   std::printf(
       "seed 001: %.2f s, %zu vertices, %zu seam edges with 3 faces, min angle %.1f deg, "
-      "%.1f %% >= 30 deg, mean Q %.3f, irregular %.1f %% (2p+2 on seams), Hausdorff %.2g mm, "
+      "%.1f %% >= 30 deg, mean aspect ratio R/2r %.3f, irregular %.1f %% (2p+2 on seams), "
+      "Hausdorff %.2g mm, "
       "self-intersections %zu\n",
       t, r.mesh.positions.size(), seam_edges, q.min_angle_deg, 100 * q.fraction_min_angle_ge_30,
-      q.q_mean, 100 * q.fraction_irregular, q.hausdorff, q.self_intersections);
+      q.aspect_ratio_mean, 100 * q.fraction_irregular, q.hausdorff, q.self_intersections);
   return 0;
 }

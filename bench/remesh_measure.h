@@ -1,6 +1,6 @@
 // The quality measure applied alike to every remesher's output (ours and CGAL's), from the
-// output and the input alone: min angle, share >= 30 deg, mean Q, irregular valence, symmetric
-// sampled Hausdorff distance, self-intersections.
+// output and the input alone: min angle, share >= 30 deg, mean aspect ratio R/2r, irregular
+// valence, symmetric sampled Hausdorff distance, self-intersections.
 #pragma once
 
 #include <algorithm>
@@ -19,7 +19,8 @@ struct RemeshMeasure {
   std::string method;
   double seconds = 0;
   std::size_t vertices = 0;
-  double min_angle = 0, ge30 = 0, mean_q = 0, irregular = 0, hausdorff = 0, mean_dist = 0;
+  double min_angle = 0, ge30 = 0, mean_aspect_ratio = 0, irregular = 0, hausdorff = 0,
+         mean_dist = 0;
   std::size_t self_intersections = 0;
 };
 
@@ -69,11 +70,11 @@ inline RemeshMeasure measure_remesh(const std::string& method, double seconds, c
     const double m = std::min({ang(a, b, c), ang(b, c, a), ang(c, a, b)});
     amin = std::min(amin, m);
     ge += m >= 30;
-    qsum += std::min(remeshing::aspect_ratio(a, b, c), 1e6);
+    qsum += std::min(aspect_ratio(a, b, c), 1e6);
   }
   r.min_angle = amin;
   r.ge30 = static_cast<double>(ge) / out.triangles.size();
-  r.mean_q = qsum / out.triangles.size();
+  r.mean_aspect_ratio = qsum / out.triangles.size();
   const auto d1 = remeshing::sampled_distance(out, in), d2 = remeshing::sampled_distance(in, out);
   r.hausdorff = std::max(d1[0], d2[0]);
   r.mean_dist = d1[1];

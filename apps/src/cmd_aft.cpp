@@ -218,14 +218,16 @@ nlohmann::json border_json(const Loaded& l) {
           {"dropped_lines", l.border.dropped_lines}};
 }
 
-// The radius ratio q = 2 r_in / R_circ in bins of 0.1; from 0.5 on drawn as good (q = 0.5 is
-// about a 30-30-120 or a 20-80-80 deg triangle).
-void write_q_histogram_png(const std::filesystem::path& path, const aft::AnimationMeshQuality& q) {
-  std::vector<std::size_t> counts(q.q_histogram.begin(), q.q_histogram.end());
+// The radius ratio 2 r_in / R_circ in bins of 0.1; from 0.5 on drawn as good (0.5 is about a
+// 30-30-120 or a 20-80-80 deg triangle).
+void write_radius_ratio_histogram_png(const std::filesystem::path& path,
+                                      const aft::AnimationMeshQuality& q) {
+  std::vector<std::size_t> counts(q.radius_ratio_histogram.begin(), q.radius_ratio_histogram.end());
   std::vector<std::string> labels;
   for (std::size_t i = 0; i < counts.size(); ++i)
     labels.push_back(i == 0 ? "0" : "." + std::to_string(i));
-  write_histogram_png(path, counts, labels, "RADIUS RATIO Q = 2 R_IN / R_CIRC", 5);
+  write_histogram_png(path, counts, labels, "RADIUS RATIO 2 R_IN / R_CIRC",
+                      {.begin = 5, .end = counts.size()});
 }
 
 int run_regions(const RegionsArgs& a) {
@@ -287,8 +289,8 @@ int run_animesh(const AnimeshArgs& a) {
   ro.draw_wireframe = true;
   ro.use_vertex_colors = true;  // region colours: the layout on the shaded surface
   write_png(outputs.stage(out / "render.png"), render_mesh(colored, ro));
-  write_quality_histogram_png(outputs.stage(out / "min_angle_histogram.png"), check);
-  write_q_histogram_png(outputs.stage(out / "q_histogram.png"), q);
+  write_min_angle_histogram_png(outputs.stage(out / "min_angle_histogram.png"), check);
+  write_radius_ratio_histogram_png(outputs.stage(out / "radius_ratio_histogram.png"), q);
   int unmeshed = 0;
   for (const auto& s : am.region_stats) unmeshed += s.unmeshed_front_edges;
   nlohmann::json j;
@@ -328,10 +330,10 @@ int run_animesh(const AnimeshArgs& a) {
                   {"max_angle_deg", q.max_angle_deg},
                   {"fraction_min_angle_ge_30", q.fraction_min_angle_ge_30},
                   {"fraction_min_angle_ge_20", q.fraction_min_angle_ge_20},
-                  {"mean_q", q.mean_q},
-                  {"min_q", q.min_q},
+                  {"mean_radius_ratio", q.mean_radius_ratio},
+                  {"min_radius_ratio", q.min_radius_ratio},
                   {"min_angle_histogram_5deg", q.min_angle_histogram},
-                  {"q_histogram_0.1", q.q_histogram},
+                  {"radius_ratio_histogram_0.1", q.radius_ratio_histogram},
                   {"hausdorff_mesh_to_surface_mm", q.hausdorff_mesh_to_surface_mm},
                   {"hausdorff_surface_to_mesh_mm", q.hausdorff_surface_to_mesh_mm},
                   {"max_vertex_offset_mm", q.max_vertex_offset_mm},
@@ -368,7 +370,7 @@ int run_animesh(const AnimeshArgs& a) {
         << t_mesh << " s\n"
         << q.to_text() << "outputs in " << out.string()
         << "/: mesh.ply mesh.obj animesh.json regions.png mesh2d.png render.png "
-           "min_angle_histogram.png q_histogram.png\n";
+           "min_angle_histogram.png radius_ratio_histogram.png\n";
   result() = j;
   result()["out"] = out.string();
   // The mesher's guarantees, checked on what was written: open fronts or a failed check are

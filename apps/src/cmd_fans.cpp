@@ -66,8 +66,8 @@ nlohmann::json check_json(const MeshCheckReport& check) {
           {"genus", t.genus()},
           {"min_angle_deg", check.min_angle_deg},
           {"mean_min_angle_deg", check.mean_min_angle_deg},
-          {"min_quality", check.min_quality},
-          {"mean_quality", check.mean_quality},
+          {"min_radius_ratio", check.min_radius_ratio},
+          {"mean_radius_ratio", check.mean_radius_ratio},
           {"fraction_min_angle_ge_30", check.fraction_min_angle_ge_30},
           {"min_angle_histogram_5deg", check.min_angle_histogram},
           {"verdicts", verdicts},
@@ -133,7 +133,7 @@ int run_fans(const FansArgs& args) {
   if (!args.render_png.empty())
     write_png(outputs.stage(args.render_png), render_views(result.mesh));
   if (!args.histogram_png.empty())
-    write_quality_histogram_png(outputs.stage(args.histogram_png), report);
+    write_min_angle_histogram_png(outputs.stage(args.histogram_png), report);
   const nlohmann::json summary =
       fans_report_json(args.cloud, cloud, result, need_check ? &report : nullptr);
   if (!args.report.empty())
@@ -174,7 +174,7 @@ int run_check(const CheckArgs& args) {
   say() << args.mesh << "\n" << report.to_text();
   result() = check_json(report);
   result()["mesh"] = args.mesh;
-  if (!args.histogram_png.empty()) write_quality_histogram_png(args.histogram_png, report);
+  if (!args.histogram_png.empty()) write_min_angle_histogram_png(args.histogram_png, report);
   if (required.empty()) return report.edge_manifold() ? kSuccess : kNotEdgeManifold;
   // Only the required properties decide the exit code; each failing one is named on stderr.
   bool all_hold = true;

@@ -1,12 +1,12 @@
 // `scanmesh remesh`: seed 001 adaptive remeshing with feature skeleton (docs/remeshing.md).
 #include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
 #include <Eigen/Geometry>
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
 
@@ -215,15 +215,16 @@ int run_remesh(const RemeshArgs& a) {
        << "  skeleton: " << s.skeleton_segments << " segments, " << s.branch_vertices
        << " branch vertices, " << s.patches << " patches\n"
        << "  min angle " << q.min_angle_deg
-       << " deg, >= 30 deg: " << 100 * q.fraction_min_angle_ge_30 << " %, mean Q " << q.q_mean
-       << ", irregular valence " << 100 * q.fraction_irregular << " %\n"
+       << " deg, >= 30 deg: " << 100 * q.fraction_min_angle_ge_30 << " %, mean aspect ratio R/2r "
+       << q.aspect_ratio_mean << ", irregular valence " << 100 * q.fraction_irregular << " %\n"
        << "  triangles < 30 deg at: branch " << q.bad_at_branch << ", boundary "
        << q.bad_at_boundary << ", other skeleton " << q.bad_at_skeleton << ", interior "
-       << q.bad_interior << "\n"
+       << q.bad_interior
+       << "\n"
        // %g: an input with a vertex at 1e308 printed 155 digits in fixed notation
        << "  Hausdorff " << format_number(q.hausdorff) << " mm ("
-       << format_number(100 * q.hausdorff / q.bbox_diagonal) << " % of the diagonal), mean distance "
-       << format_number(q.mean_distance) << " mm\n"
+       << format_number(100 * q.hausdorff / q.bbox_diagonal)
+       << " % of the diagonal), mean distance " << format_number(q.mean_distance) << " mm\n"
        << "  polish: faces < " << a.polish_angle << " deg " << s.polish_bad_before << " -> "
        << s.polish_bad_after << " (" << s.polish_moves << " moves, " << s.polish_flips
        << " flips); repair splits " << s.repair_splits;
@@ -232,7 +233,7 @@ int run_remesh(const RemeshArgs& a) {
          << "before the repair pass: " << s.intersecting_faces_before_repair << ")";
   if (s.input_intersecting_faces > 0)
     text << "\n  the input cuts itself: " << s.input_intersecting_faces
-         << " faces cut another input face; within two output edges of them (" 
+         << " faces cut another input face; within two output edges of them ("
          << s.input_defect_zone_faces
          << " input faces) the output follows the input's crossings and is checked for "
             "degenerate faces only";
@@ -253,7 +254,8 @@ void register_remesh_commands(CLI::App& app, CommandList& commands) {
   c->add_option("mesh", args->mesh, "Input mesh (.ply with face labels kept, .off, .obj, .stl)")
       ->required()
       ->check(CLI::ExistingFile);
-  c->add_option("--vertices", args->vertices, "Target vertex count")->required()
+  c->add_option("--vertices", args->vertices, "Target vertex count")
+      ->required()
       ->check(in_range(4, 1e8));
   c->add_option("--features", args->features,
                 "Feature lines file (docs/formats.md) or 'auto' (sharp edges by dihedral angle)");
@@ -319,13 +321,13 @@ void register_remesh_commands(CLI::App& app, CommandList& commands) {
                 "length are removed")
       ->check(in_range(0, 180));
   c->add_option("--polish-rounds", args->polish_rounds,
-                 "Angle polish rounds after the smoothing (0: off; docs/remeshing.md)")
+                "Angle polish rounds after the smoothing (0: off; docs/remeshing.md)")
       ->check(in_range(0, 1000));
   c->add_option("--polish-angle", args->polish_angle,
-                 "The polish works on faces whose min angle is below this (deg)")
+                "The polish works on faces whose min angle is below this (deg)")
       ->check(in_range(0, 60));
   c->add_option("--polish-flip-cost", args->polish_flip_cost,
-                 "Largest valence cost (rise of R) of a polish flip; 4 = a flip in a regular patch")
+                "Largest valence cost (rise of R) of a polish flip; 4 = a flip in a regular patch")
       ->check(in_range(0, 1000));
   c->add_option("--polish-floor", args->polish_floor,
                 "Faces still below this min angle (deg) after the polish get more rounds with "

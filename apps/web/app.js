@@ -102,7 +102,8 @@ function pointsObject(xyz, rgb) {
   return new THREE.Points(g, new THREE.PointsMaterial({ size: 1.5, vertexColors: THREE.VertexColors }));
 }
 
-// Per-face quality of a non-indexed triangle geometry: min angle (degrees) and q = 2 r_in / R_circ.
+// Per-face quality of a non-indexed triangle geometry: min angle (degrees) and the radius ratio
+// q = 2 r_in / R_circ (core/include/scanmesh/core/triangle_quality.h).
 function faceQualities(geometry) {
   const p = geometry.attributes.position.array, n = p.length / 9;
   const minAngle = new Float32Array(n), q = new Float32Array(n);
@@ -511,9 +512,9 @@ function showMesh(reframe) {
   const worst = n ? Math.min(...minAngle) : 0;
   const meanQ = n ? q.reduce((a, b) => a + b, 0) / n : 0;
   $('mesh-stats').innerHTML = '<b>' + esc(state.meshPath) + '</b><br>' + distinctVertices(g) + ' vertices, ' + n + ' triangles<br>' +
-    fmt(100 * good / Math.max(n, 1), 1) + ' % of triangles with min angle ≥ 30°, worst ' + fmt(worst, 2) + '°, mean q ' + fmt(meanQ, 3);
+    fmt(100 * good / Math.max(n, 1), 1) + ' % of triangles with min angle ≥ 30°, worst ' + fmt(worst, 2) + '°, mean radius ratio 2r/R ' + fmt(meanQ, 3);
   $('mesh-legend').innerHTML = mode === 'minangle' ? 'min angle: 0° <span class="legend-bar"></span> 60°'
-    : mode === 'q' ? 'q: 0 <span class="legend-bar"></span> 1' : '';
+    : mode === 'q' ? 'radius ratio 2r/R: 0 <span class="legend-bar"></span> 1' : '';
 }
 $('mesh-colour').addEventListener('change', () => showMesh(false));
 $('mesh-wire').addEventListener('change', () => showMesh(false));

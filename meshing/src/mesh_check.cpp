@@ -174,7 +174,8 @@ std::vector<std::array<int, 2>> intersecting_face_pairs(const Mesh& mesh,
   {
     std::vector<int> fill(start.begin(), start.end() - 1);
     for (std::size_t i = 0; i < F.size(); ++i)
-      if (!repeats[i]) cell_range(i, [&](long long k) { members[fill[k]++] = static_cast<int>(i); });
+      if (!repeats[i])
+        cell_range(i, [&](long long k) { members[fill[k]++] = static_cast<int>(i); });
   }
   std::vector<long long> keys;  // cells holding two faces or more
   double candidates = 0;
@@ -233,20 +234,6 @@ double point_triangle_squared_distance(const Vector3d& p, const Vector3d& a, con
     return (p - (b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b))).squaredNorm();
   const double denom = 1.0 / (va + vb + vc);
   return (p - (a + ab * (vb * denom) + ac * (vc * denom))).squaredNorm();
-}
-
-double triangle_min_angle(const Vector3d& a, const Vector3d& b, const Vector3d& c) {
-  auto at = [](const Vector3d& p, const Vector3d& q, const Vector3d& r) {
-    const Vector3d e1 = q - p, e2 = r - p;
-    return std::atan2(e1.cross(e2).norm(), e1.dot(e2));
-  };
-  return std::min({at(a, b, c), at(b, c, a), at(c, a, b)});
-}
-
-double triangle_quality(const Vector3d& a, const Vector3d& b, const Vector3d& c) {
-  const double s = (b - a).squaredNorm() + (c - b).squaredNorm() + (a - c).squaredNorm();
-  const double area = 0.5 * (b - a).cross(c - a).norm();
-  return s > 0 ? 4.0 * std::sqrt(3.0) * area / s : 0.0;
 }
 
 bool MeshCheckReport::defect_free() const {
@@ -309,13 +296,13 @@ MeshCheckReport check_mesh(const Mesh& mesh, const MeshCheckOptions& options) {
   double sum_angle = 0, sum_q = 0;
   std::size_t good = 0;
   r.min_angle_deg = F.empty() ? 0 : 180.0;
-  r.min_quality = F.empty() ? 0 : 1.0;
+  r.min_radius_ratio = F.empty() ? 0 : 1.0;
   for (const auto& t : F) {
     if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
       ++r.degenerate_faces;
       r.min_angle_histogram[0]++;
       r.min_angle_deg = 0;
-      r.min_quality = 0;
+      r.min_radius_ratio = 0;
       continue;
     }
     const Vector3d &a = P[t[0]], &b = P[t[1]], &c = P[t[2]];
@@ -325,9 +312,9 @@ MeshCheckReport check_mesh(const Mesh& mesh, const MeshCheckOptions& options) {
       return d > 0 ? std::acos(std::clamp((x - p).dot(y - p) / d, -1.0, 1.0)) * 180.0 / kPi : 0.0;
     };
     const double m = std::min({angle(a, b, c), angle(b, c, a), angle(c, a, b)});
-    const double q = triangle_quality(a, b, c);
+    const double q = radius_ratio(a, b, c);
     r.min_angle_deg = std::min(r.min_angle_deg, m);
-    r.min_quality = std::min(r.min_quality, q);
+    r.min_radius_ratio = std::min(r.min_radius_ratio, q);
     sum_angle += m;
     sum_q += q;
     if (m >= 30.0) ++good;
@@ -335,18 +322,19 @@ MeshCheckReport check_mesh(const Mesh& mesh, const MeshCheckOptions& options) {
   }
   if (!F.empty()) {
     r.mean_min_angle_deg = sum_angle / static_cast<double>(F.size());
-    r.mean_quality = sum_q / static_cast<double>(F.size());
+    r.mean_radius_ratio = sum_q / static_cast<double>(F.size());
     r.fraction_min_angle_ge_30 = static_cast<double>(good) / static_cast<double>(F.size());
   }
   if (options.self_intersections) {
     const std::size_t budget = default_candidate_pair_budget(F.size());
     bool complete = true;
-    r.self_intersections = intersecting_face_pairs(mesh, nullptr, nullptr, budget, &complete).size();
+    r.self_intersections =
+        intersecting_face_pairs(mesh, nullptr, nullptr, budget, &complete).size();
     r.self_intersections_checked = complete;
     if (!complete)
-      r.self_intersections_not_checked_reason =
-          "faces crowd one place (more than " + std::to_string(budget) +
-          " candidate pairs in the broad phase)";
+      r.self_intersections_not_checked_reason = "faces crowd one place (more than " +
+                                                std::to_string(budget) +
+                                                " candidate pairs in the broad phase)";
   }
   return r;
 }
@@ -383,8 +371,8 @@ std::string MeshCheckReport::to_text() const {
     o << "genus                 " << topology.genus() << "\n";
   o << "min angle [deg]       " << min_angle_deg << " (mean of per-face minima "
     << mean_min_angle_deg << ")\n"
-    << "quality q             min " << min_quality << ", mean " << mean_quality
-    << "  (q = 4 sqrt3 A / sum l^2)\n"
+    << "radius ratio 2r/R     min " << min_radius_ratio << ", mean " << mean_radius_ratio
+    << "  (1 = equilateral)\n"
     << "faces min angle >= 30 " << 100.0 * fraction_min_angle_ge_30 << " %\n"
     << "min-angle histogram   ";
   for (std::size_t i = 0; i < min_angle_histogram.size(); ++i)
@@ -402,21 +390,29 @@ std::string MeshCheckReport::to_text() const {
 
 namespace {
 constexpr std::array<MeshProperty, 8> kAllProperties{
-    MeshProperty::NonEmpty,         MeshProperty::Closed,       MeshProperty::EdgeManifold,
-    MeshProperty::VertexManifold,   MeshProperty::Oriented,     MeshProperty::IntersectionFree,
-    MeshProperty::NoDegenerate,     MeshProperty::NoDuplicates};
+    MeshProperty::NonEmpty,       MeshProperty::Closed,      MeshProperty::EdgeManifold,
+    MeshProperty::VertexManifold, MeshProperty::Oriented,    MeshProperty::IntersectionFree,
+    MeshProperty::NoDegenerate,   MeshProperty::NoDuplicates};
 }  // namespace
 
 const char* property_name(MeshProperty p) {
   switch (p) {
-    case MeshProperty::NonEmpty: return "non-empty";
-    case MeshProperty::Closed: return "closed";
-    case MeshProperty::EdgeManifold: return "edge-manifold";
-    case MeshProperty::VertexManifold: return "vertex-manifold";
-    case MeshProperty::Oriented: return "oriented";
-    case MeshProperty::IntersectionFree: return "intersection-free";
-    case MeshProperty::NoDegenerate: return "no-degenerate";
-    case MeshProperty::NoDuplicates: return "no-duplicates";
+    case MeshProperty::NonEmpty:
+      return "non-empty";
+    case MeshProperty::Closed:
+      return "closed";
+    case MeshProperty::EdgeManifold:
+      return "edge-manifold";
+    case MeshProperty::VertexManifold:
+      return "vertex-manifold";
+    case MeshProperty::Oriented:
+      return "oriented";
+    case MeshProperty::IntersectionFree:
+      return "intersection-free";
+    case MeshProperty::NoDegenerate:
+      return "no-degenerate";
+    case MeshProperty::NoDuplicates:
+      return "no-duplicates";
   }
   return "?";
 }
@@ -426,7 +422,8 @@ std::span<const MeshProperty> all_mesh_properties() { return kAllProperties; }
 std::vector<MeshProperty> parse_mesh_properties(const std::string& list) {
   std::vector<MeshProperty> out;
   std::string valid;
-  for (MeshProperty p : kAllProperties) valid += std::string(valid.empty() ? "" : ", ") + property_name(p);
+  for (MeshProperty p : kAllProperties)
+    valid += std::string(valid.empty() ? "" : ", ") + property_name(p);
   std::size_t begin = 0;
   while (begin <= list.size()) {
     const std::size_t end = std::min(list.find(',', begin), list.size());
@@ -454,8 +451,8 @@ std::vector<PropertyVerdict> mesh_verdicts(const MeshCheckReport& r) {
   if (t.boundary_edges) open += " (" + std::to_string(t.boundary_edges) + " boundary edges)";
   if (r.faces == 0) open = "no faces";
   if (!r.edge_manifold()) open += std::string(open.empty() ? "" : ", ") + "not edge-manifold";
-  v.push_back({MeshProperty::Closed, true, r.faces > 0 && t.boundary_edges == 0 && r.edge_manifold(),
-               open});
+  v.push_back({MeshProperty::Closed, true,
+               r.faces > 0 && t.boundary_edges == 0 && r.edge_manifold(), open});
   v.push_back({MeshProperty::EdgeManifold, true, r.edge_manifold(),
                count(t.nonmanifold_edges, "edges with more than two faces")});
   v.push_back({MeshProperty::VertexManifold, true, r.nonmanifold_vertices == 0,
@@ -472,6 +469,16 @@ std::vector<PropertyVerdict> mesh_verdicts(const MeshCheckReport& r) {
   v.push_back({MeshProperty::NoDuplicates, true, r.duplicate_faces == 0,
                count(r.duplicate_faces, "duplicate faces")});
   return v;
+}
+
+void write_min_angle_histogram_png(const std::filesystem::path& path, const MeshCheckReport& report,
+                                   const std::string& title) {
+  const auto& h = report.min_angle_histogram;
+  std::vector<std::string> labels;
+  for (std::size_t i = 0; i < h.size(); ++i) labels.push_back(std::to_string(i * 5));
+  // Bins from 30 deg on are drawn as good: the animation meshes' goal (seed 000, issue 4).
+  write_histogram_png(path, std::span<const std::size_t>(h.data(), h.size()), labels, title,
+                      {.begin = 6, .end = h.size()});
 }
 
 }  // namespace scanmesh

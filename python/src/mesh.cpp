@@ -78,8 +78,8 @@ py::dict check_report(const MeshCheckReport& r) {
   d["self_intersections_not_checked_reason"] = r.self_intersections_not_checked_reason;
   d["min_angle_deg"] = r.min_angle_deg;
   d["mean_min_angle_deg"] = r.mean_min_angle_deg;
-  d["min_quality"] = r.min_quality;
-  d["mean_quality"] = r.mean_quality;
+  d["min_radius_ratio"] = r.min_radius_ratio;
+  d["mean_radius_ratio"] = r.mean_radius_ratio;
   d["fraction_min_angle_ge_30"] = r.fraction_min_angle_ge_30;
   d["min_angle_histogram_5deg"] =
       std::vector<std::size_t>(r.min_angle_histogram.begin(), r.min_angle_histogram.end());
@@ -214,7 +214,7 @@ The mesh checker (check_mesh, as `scanmesh check`; docs/fans.md, "Checker"). Ret
 counts (vertices, faces, edges, boundary_edges, nonmanifold_edges, boundary_loops,
 boundary_loop_lengths, euler_characteristic, components, genus, duplicate_faces,
 degenerate_faces, nonmanifold_vertices, self_intersections, ...), quality (min_angle_deg,
-mean_quality, fraction_min_angle_ge_30, min_angle_histogram_5deg), edge_manifold, defect_free,
+mean_radius_ratio, fraction_min_angle_ge_30, min_angle_histogram_5deg), edge_manifold, defect_free,
 "verdicts": {property name: True / False / None (not tested)} for every name of
 mesh_properties(), "evidence": {name: what decided it}, and "text" (the CLI's report).
 self_intersections=False skips the most expensive test (its verdict is then None).)doc");

@@ -224,11 +224,12 @@ py::dict animesh_report(const AftInput& l, const aft::AnimationMesh& am,
   quality["max_angle_deg"] = q.max_angle_deg;
   quality["fraction_min_angle_ge_30"] = q.fraction_min_angle_ge_30;
   quality["fraction_min_angle_ge_20"] = q.fraction_min_angle_ge_20;
-  quality["mean_q"] = q.mean_q;
-  quality["min_q"] = q.min_q;
+  quality["mean_radius_ratio"] = q.mean_radius_ratio;
+  quality["min_radius_ratio"] = q.min_radius_ratio;
   quality["min_angle_histogram_5deg"] =
       std::vector<int>(q.min_angle_histogram.begin(), q.min_angle_histogram.end());
-  quality["q_histogram_0.1"] = std::vector<int>(q.q_histogram.begin(), q.q_histogram.end());
+  quality["radius_ratio_histogram_0.1"] =
+      std::vector<int>(q.radius_ratio_histogram.begin(), q.radius_ratio_histogram.end());
   quality["valence_histogram"] = q.valence_histogram;
   quality["hausdorff_mesh_to_surface_mm"] = q.hausdorff_mesh_to_surface_mm;
   quality["hausdorff_surface_to_mesh_mm"] = q.hausdorff_surface_to_mesh_mm;

@@ -56,7 +56,7 @@ TEST_F(CliAnimesh, AnimeshWritesMeshReportAndPictures) {
   const auto r = run("animesh " + sample_args() + " --out " + out.string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   for (const char* f : {"mesh.ply", "mesh.obj", "animesh.json", "regions.png", "mesh2d.png",
-                        "render.png", "min_angle_histogram.png", "q_histogram.png"})
+                        "render.png", "min_angle_histogram.png", "radius_ratio_histogram.png"})
     EXPECT_TRUE(fs::exists(out / f)) << f;
   const Mesh mesh = read_ply(out / "mesh.ply");
   const auto report = nlohmann::json::parse(std::ifstream(out / "animesh.json"));
@@ -75,10 +75,11 @@ TEST_F(CliAnimesh, AnimeshWritesMeshReportAndPictures) {
   std::size_t in_min_angle_bins = 0, in_q_bins = 0;
   for (const auto& n : report["quality"]["min_angle_histogram_5deg"])
     in_min_angle_bins += n.get<std::size_t>();
-  for (const auto& n : report["quality"]["q_histogram_0.1"]) in_q_bins += n.get<std::size_t>();
+  for (const auto& n : report["quality"]["radius_ratio_histogram_0.1"])
+    in_q_bins += n.get<std::size_t>();
   EXPECT_EQ(in_min_angle_bins, mesh.triangles.size());
   EXPECT_EQ(in_q_bins, mesh.triangles.size());
-  EXPECT_EQ(read_png(out / "q_histogram.png").width, 640);
+  EXPECT_EQ(read_png(out / "radius_ratio_histogram.png").width, 640);
   // mesh2d.png is upright, like the texture: the mesh lies between the crown line (y = 72 from
   // the top) and the neck line (y = 482), so the rows above and below are the texture's own.
   ASSERT_EQ(run("export " + (dir_ / "head.smg").string() + " --texture " +

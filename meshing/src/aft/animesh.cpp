@@ -261,8 +261,8 @@ std::vector<int> ideal_valences(const std::vector<std::array<int, 3>>& T,
 // taken if it lowers the summed squared deviation of the four corners from their ideal valence
 // (ideal_valences; at a segment node in its region's job 4, not 6). The AFT's layers leave ~35 %
 // irregular Steiner points and the max-min-angle flips cannot see valence; with the smoothing's
-// quality rule below this raised the mean q at a quarter of the sample units from 0.946 to 0.960
-// and lowered the triangles below 30 deg from 0.63 to 0.56 %. A flip may lower the pair's
+// quality rule below this raised the mean radius ratio at a quarter of the sample units from 0.946
+// to 0.960 and lowered the triangles below 30 deg from 0.63 to 0.56 %. A flip may lower the pair's
 // smallest angle, but not below `floor_rad` (or the smallest angle before it); the max-min flips
 // after the smoothing restore the angles where the valence gain was not worth it.
 int valence_flips(std::vector<std::array<int, 3>>& T, const detail::NodeStore& store,
@@ -352,10 +352,10 @@ std::size_t count_crossings_near(const std::vector<std::array<int, 3>>& tris,
 // more small angles at a quarter of the sample units: 0.14 % of the triangles below 20 deg
 // instead of 0.09 %; the centroid moves are up to half an edge, the search's steps a quarter
 // and less.) A move is kept if no incident triangle turns away from the point's normal and
-// either the smallest incident angle grows or the star's summed radius ratio q grows while its
-// smallest angle stays at or above min(before, 30 deg). (The angle rule alone refused most
-// moves that only made the star rounder: mean q 0.946 at a quarter of the sample units; with
-// the q rule 0.952, 0.965 with the valence flips.)
+// either the smallest incident angle grows or the star's summed mean ratio (triangle_quality.h)
+// grows while its smallest angle stays at or above min(before, 30 deg). (The angle rule alone
+// refused most moves that only made the star rounder: mean radius ratio 0.946 at a quarter of
+// the sample units; with the mean-ratio rule 0.952, 0.965 with the valence flips.)
 void smooth_steiner_points(const std::vector<std::array<int, 3>>& tris, detail::NodeStore& store,
                            const ScanSurface& surface, std::size_t boundary_nodes, int iterations,
                            WallCrossingGuard& guard) {
@@ -372,11 +372,11 @@ void smooth_steiner_points(const std::vector<std::array<int, 3>>& tris, detail::
   const auto star_quality = [&](std::size_t v) {
     double sum = 0;
     for (int t : vt[v])
-      sum += triangle_quality(store.pos[tris[t][0]], store.pos[tris[t][1]], store.pos[tris[t][2]]);
+      sum += mean_ratio(store.pos[tris[t][0]], store.pos[tris[t][1]], store.pos[tris[t][2]]);
     return sum;
   };
-  // Is v's star rounder (summed q) at its new position than at old_pos? Only asked when the
-  // smallest angle did not grow, so most moves skip the 2 x valence q evaluations.
+  // Is v's star rounder (summed mean ratio) at its new position than at old_pos? Only asked
+  // when the smallest angle did not grow, so most moves skip the 2 x valence evaluations.
   const auto rounder = [&](std::size_t v, const Vector3d& old_pos) {
     const Vector3d new_pos = store.pos[v];
     const double q_new = star_quality(v);
@@ -1033,7 +1033,8 @@ std::string AnimationMeshQuality::to_text() const {
      << " triangles exempt), max angle " << max_angle_deg << " deg\n";
   os << "min angle >= 30 deg: " << 100 * fraction_min_angle_ge_30
      << " %, >= 20 deg: " << 100 * fraction_min_angle_ge_20 << " %\n";
-  os << "q = 2 r_in / R_circ: mean " << mean_q << ", min " << min_q << "\n";
+  os << "radius ratio 2 r_in / R_circ: mean " << mean_radius_ratio << ", min " << min_radius_ratio
+     << "\n";
   os << "Hausdorff to the scan surface: mesh->surface " << hausdorff_mesh_to_surface_mm
      << " mm, surface->mesh " << hausdorff_surface_to_mesh_mm << " mm; max vertex offset "
      << max_vertex_offset_mm << " mm";
@@ -1057,7 +1058,7 @@ AnimationMeshQuality evaluate_quality(const AnimationMesh& am, const ScanSurface
   for (const auto& e : am.line_edges) line_edge.insert(ukey(e[0], e[1]));
   q.min_angle_deg = 180;
   q.min_angle_non_exempt_deg = 180;
-  q.min_q = 1;
+  q.min_radius_ratio = 1;
   int ge30 = 0, ge20 = 0;
   std::vector<int> valence(P.size(), 0);
   std::unordered_set<std::uint64_t> edges;
@@ -1079,14 +1080,10 @@ AnimationMeshQuality evaluate_quality(const AnimationMesh& am, const ScanSurface
     ge30 += mn >= 30;
     ge20 += mn >= 20;
     q.min_angle_histogram[std::min(11, static_cast<int>(mn / 5))]++;
-    const double a = (P[f[1]] - P[f[0]]).norm(), b = (P[f[2]] - P[f[1]]).norm(),
-                 c = (P[f[0]] - P[f[2]]).norm();
-    const double area = 0.5 * (P[f[1]] - P[f[0]]).cross(P[f[2]] - P[f[0]]).norm();
-    const double s = 0.5 * (a + b + c);
-    const double qq = s > 0 && a * b * c > 0 ? 8 * area * area / (s * a * b * c) : 0;
-    q.mean_q += qq;
-    q.min_q = std::min(q.min_q, qq);
-    q.q_histogram[std::clamp(static_cast<int>(qq * 10), 0, 9)]++;
+    const double rho = radius_ratio(P[f[0]], P[f[1]], P[f[2]]);
+    q.mean_radius_ratio += rho;
+    q.min_radius_ratio = std::min(q.min_radius_ratio, rho);
+    q.radius_ratio_histogram[std::clamp(static_cast<int>(rho * 10), 0, 9)]++;
     for (int k = 0; k < 3; ++k) edges.insert(ukey(f[k], f[(k + 1) % 3]));
     const int label = t < am.mesh.face_labels.size() ? am.mesh.face_labels[t] : 0;
     if (label >= static_cast<int>(q.triangles_per_region.size()))
@@ -1100,7 +1097,7 @@ AnimationMeshQuality evaluate_quality(const AnimationMesh& am, const ScanSurface
   for (int v : valence)
     if (v) q.valence_histogram[v]++;
   if (!T.empty()) {
-    q.mean_q /= T.size();
+    q.mean_radius_ratio /= T.size();
     q.fraction_min_angle_ge_30 = static_cast<double>(ge30) / T.size();
     q.fraction_min_angle_ge_20 = static_cast<double>(ge20) / T.size();
   }

@@ -5,10 +5,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <numbers>
-#include <sstream>
+#include <string>
 
 #include "scanmesh/core/errors.h"
+#include "scanmesh/core/histogram_picture.h"
 #include "scanmesh/core/render.h"
 #include "scanmesh/meshing/mesh_check.h"
 
@@ -115,15 +117,6 @@ Rgb8 ramp(double t) {  // blue -> cyan -> yellow -> red
 
 }  // namespace
 
-double aspect_ratio(const Vec3& a, const Vec3& b, const Vec3& c) {
-  const double la = (b - c).norm(), lb = (c - a).norm(), lc = (a - b).norm();
-  const double area = 0.5 * (b - a).cross(c - a).norm();
-  if (!(area > 0)) return std::numeric_limits<double>::infinity();
-  const double s = 0.5 * (la + lb + lc);
-  const double R = la * lb * lc / (4 * area), r = area / s;
-  return R / (2 * r);
-}
-
 std::array<double, 2> sampled_distance(const Mesh& a, const Mesh& b) {
   std::vector<Vec3> samples = a.positions;
   for (const auto& t : a.triangles) {
@@ -178,14 +171,14 @@ RemeshQuality evaluate_remesh(const Mesh& input, const RemeshResult& r, bool che
     q.angle_histogram[std::clamp(static_cast<int>(ang * 180 / std::numbers::pi / 5), 0, 11)]++;
     const double ar = aspect_ratio(a, b, c);
     qsum += std::min(ar, 1e6);
-    q.q_max = std::max(q.q_max, ar);
-    q.q_histogram[std::clamp(static_cast<int>((ar - 1) * 10), 0, 9)]++;
+    q.aspect_ratio_max = std::max(q.aspect_ratio_max, ar);
+    q.aspect_ratio_histogram[std::clamp(static_cast<int>((ar - 1) * 10), 0, 9)]++;
   }
   const double nf = std::max<double>(1, static_cast<double>(q.faces));
   q.min_angle_deg = amin * 180 / std::numbers::pi;
   q.mean_min_angle_deg = asum / nf * 180 / std::numbers::pi;
   q.fraction_min_angle_ge_30 = static_cast<double>(ge30) / nf;
-  q.q_mean = qsum / nf;
+  q.aspect_ratio_mean = qsum / nf;
   std::vector<std::vector<int>> nb(q.vertices);
   for (const auto& t : m.triangles)
     for (int i = 0; i < 3; ++i)
@@ -222,31 +215,33 @@ RemeshQuality evaluate_remesh(const Mesh& input, const RemeshResult& r, bool che
 }
 
 std::string RemeshQuality::to_json() const {
-  std::ostringstream o;
-  o.precision(6);
-  o << "{\n  \"vertices\": " << vertices << ",\n  \"faces\": " << faces
-    << ",\n  \"min_angle_deg\": " << min_angle_deg
-    << ",\n  \"mean_min_angle_deg\": " << mean_min_angle_deg
-    << ",\n  \"below_30_at\": {\"branch\": " << bad_at_branch
-    << ", \"boundary\": " << bad_at_boundary << ", \"skeleton\": " << bad_at_skeleton
-    << ", \"interior\": " << bad_interior << "}"
-    << ",\n  \"fraction_min_angle_ge_30\": " << fraction_min_angle_ge_30
-    << ",\n  \"q_mean\": " << q_mean << ",\n  \"q_max\": " << (std::isfinite(q_max) ? q_max : 1e308)
-    << ",\n  \"q_histogram\": [";
-  for (std::size_t i = 0; i < q_histogram.size(); ++i) o << (i ? ", " : "") << q_histogram[i];
-  o << "],\n  \"min_angle_histogram_5deg\": [";
-  for (std::size_t i = 0; i < angle_histogram.size(); ++i)
-    o << (i ? ", " : "") << angle_histogram[i];
-  o << "],\n  \"valence_counted\": " << valence_counted
-    << ",\n  \"valence_optimal\": " << valence_optimal
-    << ",\n  \"fraction_irregular\": " << fraction_irregular
-    << ",\n  \"hausdorff_mm\": " << hausdorff
-    << ",\n  \"hausdorff_output_to_input_mm\": " << hausdorff_out_to_in
-    << ",\n  \"hausdorff_input_to_output_mm\": " << hausdorff_in_to_out
-    << ",\n  \"mean_distance_mm\": " << mean_distance
-    << ",\n  \"bbox_diagonal_mm\": " << bbox_diagonal << ",\n  \"self_intersections\": "
-    << (self_intersections_checked ? std::to_string(self_intersections) : "null") << "\n}\n";
-  return o.str();
+  // Ordered: the report reads top-down from counts to angles, valences and distances.
+  nlohmann::ordered_json j;
+  j["vertices"] = vertices;
+  j["faces"] = faces;
+  j["min_angle_deg"] = min_angle_deg;
+  j["mean_min_angle_deg"] = mean_min_angle_deg;
+  j["below_30_at"] = {{"branch", bad_at_branch},
+                      {"boundary", bad_at_boundary},
+                      {"skeleton", bad_at_skeleton},
+                      {"interior", bad_interior}};
+  j["fraction_min_angle_ge_30"] = fraction_min_angle_ge_30;
+  j["aspect_ratio_mean"] = aspect_ratio_mean;
+  // A degenerate face has Q = infinity, which JSON cannot hold.
+  j["aspect_ratio_max"] = std::isfinite(aspect_ratio_max) ? aspect_ratio_max : 1e308;
+  j["aspect_ratio_histogram"] = aspect_ratio_histogram;
+  j["min_angle_histogram_5deg"] = angle_histogram;
+  j["valence_counted"] = valence_counted;
+  j["valence_optimal"] = valence_optimal;
+  j["fraction_irregular"] = fraction_irregular;
+  j["hausdorff_mm"] = hausdorff;
+  j["hausdorff_output_to_input_mm"] = hausdorff_out_to_in;
+  j["hausdorff_input_to_output_mm"] = hausdorff_in_to_out;
+  j["mean_distance_mm"] = mean_distance;
+  j["bbox_diagonal_mm"] = bbox_diagonal;
+  j["self_intersections"] =
+      self_intersections_checked ? nlohmann::ordered_json(self_intersections) : nullptr;
+  return j.dump(2) + "\n";
 }
 
 Image8 render_quality(const RemeshResult& r, int view_size) {
@@ -309,23 +304,16 @@ Image8 render_density(const Mesh& input, const std::vector<double>& density, int
 }
 
 Image8 quality_histograms(const RemeshQuality& q) {
-  const int w = 420, h = 260;
-  auto chart = [&](const auto& bins, Rgb8 colour) {
-    Image8 img(w, h, 3, 255);
-    std::size_t mx = 1;
-    for (auto b : bins) mx = std::max<std::size_t>(mx, b);
-    const int nb = static_cast<int>(bins.size());
-    const int bw = (w - 20) / nb;
-    for (int i = 0; i < nb; ++i) {
-      const int bh = static_cast<int>(static_cast<double>(bins[i]) / mx * (h - 30));
-      for (int x = 10 + i * bw + 1; x < 10 + (i + 1) * bw - 1; ++x)
-        for (int y = h - 10 - bh; y < h - 10; ++y) img.set_rgb(x, y, colour);
-    }
-    for (int x = 5; x < w - 5; ++x) img.set_rgb(x, h - 10, {0, 0, 0});
-    return img;
-  };
-  // Left: Q = R/2r in bins of 0.1 from 1 (best) to >= 1.9; right: min angle, 5 deg bins to 60.
-  return hconcat({chart(q.q_histogram, {200, 80, 60}), chart(q.angle_histogram, {60, 110, 200})},
+  std::vector<std::string> q_labels, angle_labels;
+  for (std::size_t i = 0; i < q.aspect_ratio_histogram.size(); ++i)
+    q_labels.push_back(i + 1 < q.aspect_ratio_histogram.size() ? "1." + std::to_string(i) : "1.9+");
+  for (std::size_t i = 0; i < q.angle_histogram.size(); ++i)
+    angle_labels.push_back(std::to_string(5 * i));
+  // Green: Q below 1.9 (about a 30-30-120 deg triangle has Q = 2) and min angles from 30 deg.
+  return hconcat({histogram_picture(q.aspect_ratio_histogram, q_labels,
+                                    "ASPECT RATIO Q = R_CIRC / 2 R_IN", {.begin = 0, .end = 9}),
+                  histogram_picture(q.angle_histogram, angle_labels, "MIN ANGLE PER TRIANGLE [DEG]",
+                                    {.begin = 6, .end = q.angle_histogram.size()})},
                  {255, 255, 255});
 }
 

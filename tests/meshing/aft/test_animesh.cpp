@@ -386,7 +386,7 @@ TEST(AnimationMeshHead, SerialPostprocessingIsValidAndMatchesTheParallelOne) {
   EXPECT_NEAR(serial.flips, parallel.flips, 0.15 * parallel.flips);
   const double n_p = static_cast<double>(parallel.mesh.triangles.size());
   EXPECT_NEAR(static_cast<double>(serial.mesh.triangles.size()), n_p, 0.01 * n_p);
-  EXPECT_NEAR(q.mean_q, qp.mean_q, 0.01);
+  EXPECT_NEAR(q.mean_radius_ratio, qp.mean_radius_ratio, 0.01);
 }
 
 // Half the sample unit sizes (4x the triangles): the parameter-plane front search keeps every
@@ -433,15 +433,15 @@ TEST(AnimationMeshHead, ValenceFlipsGiveMoreRegularVertices) {
     for (const auto& [valence, count] : q.valence_histogram) n += count;
     return q.valence_histogram.count(6) ? double(q.valence_histogram.at(6)) / n : 0.0;
   };
-  // Measured 0.610 vs 0.589; the mean q is level here (0.9360 vs 0.9359: at these coarse units
-  // a third of the triangles touch a line, whose nodes do not move) and rises from 0.952 to
+  // Measured 0.610 vs 0.589; the mean radius ratio is level here (0.9360 vs 0.9359: at these coarse
+  // units a third of the triangles touch a line, whose nodes do not move) and rises from 0.952 to
   // 0.960 at a quarter of the units (bench_aft).
   EXPECT_GT(share_of_6(qw), share_of_6(qo) + 0.01);
-  EXPECT_GT(qw.mean_q, qo.mean_q - 0.002);
+  EXPECT_GT(qw.mean_radius_ratio, qo.mean_radius_ratio - 0.002);
   EXPECT_GE(qw.min_angle_non_exempt_deg, 20.0) << qw.to_text();
   EXPECT_TRUE(check_mesh(with.mesh).defect_free());
-  std::printf("valence 6: %.3f with valence flips, %.3f without; mean q %.4f vs %.4f\n",
-              share_of_6(qw), share_of_6(qo), qw.mean_q, qo.mean_q);
+  std::printf("valence 6: %.3f with valence flips, %.3f without; mean radius ratio %.4f vs %.4f\n",
+              share_of_6(qw), share_of_6(qo), qw.mean_radius_ratio, qo.mean_radius_ratio);
 }
 
 // repair_goal_deg 30.5: the repair lifts the triangles between 20 and 30 deg as well.

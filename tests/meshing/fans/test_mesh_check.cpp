@@ -117,7 +117,7 @@ TEST(MeshCheck, BoundaryLoopsAndUnreferencedPoints) {
 
 TEST(MeshCheck, QualityOfEquilateralAndThinTriangles) {
   const double s3 = std::sqrt(3.0);
-  EXPECT_NEAR(triangle_quality({0, 0, 0}, {1, 0, 0}, {0.5, s3 / 2, 0}), 1.0, 1e-12);
+  EXPECT_NEAR(radius_ratio({0, 0, 0}, {1, 0, 0}, {0.5, s3 / 2, 0}), 1.0, 1e-12);
   Mesh m;
   m.positions = {{0, 0, 0}, {1, 0, 0}, {0.5, s3 / 2, 0}, {10, 0, 0}, {10, 1, 0}, {30, 0, 0}};
   m.triangles = {{0, 1, 2}, {3, 5, 4}};
@@ -137,7 +137,7 @@ TEST(MeshCheck, DegenerateFaceIsCounted) {
 
 TEST(MeshCheck, HistogramPngIsWritten) {
   const auto path = std::filesystem::path(SCANMESH_BINARY_DIR) / "test_quality_histogram.png";
-  write_quality_histogram_png(path, check_mesh(tetrahedron()));
+  write_min_angle_histogram_png(path, check_mesh(tetrahedron()));
   const Image8 img = read_png(path);
   EXPECT_EQ(img.width, 640);
   EXPECT_EQ(img.height, 400);

@@ -11,7 +11,9 @@
 #include <string>
 #include <vector>
 
+#include "scanmesh/core/histogram_picture.h"
 #include "scanmesh/core/mesh.h"
+#include "scanmesh/core/triangle_quality.h"
 #include "scanmesh/meshing/mesh_topology.h"
 
 namespace scanmesh {
@@ -32,9 +34,10 @@ struct MeshCheckReport {
   //! Why the test did not run although asked for (empty otherwise): faces crowding one place so
   //! that the pair tests would grow quadratically (intersecting_face_pairs' budget).
   std::string self_intersections_not_checked_reason;
-  // Quality: min angle per face, and q = 4 sqrt(3) A / (l1^2 + l2^2 + l3^2), 1 = equilateral.
+  // Quality: min angle per face, and the radius ratio 2 r_in / R_circ (triangle_quality.h;
+  // 1 = equilateral, 0 = degenerate).
   double min_angle_deg = 0, mean_min_angle_deg = 0;
-  double min_quality = 0, mean_quality = 0;
+  double min_radius_ratio = 0, mean_radius_ratio = 0;
   double fraction_min_angle_ge_30 = 0;  //!< share of faces whose smallest angle is >= 30 deg
   std::array<std::size_t, 12> min_angle_histogram{};  //!< bins of 5 deg over [0, 60]
 
@@ -103,29 +106,14 @@ std::vector<std::array<int, 2>> intersecting_face_pairs(
 bool triangles_intersect(const std::vector<Eigen::Vector3d>& P, const std::array<int, 3>& f,
                          const std::array<int, 3>& g);
 
-//! Smallest interior angle of the triangle (a, b, c), radians (atan2 form: exact near 0 and pi).
-double triangle_min_angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                          const Eigen::Vector3d& c);
-
 //! Squared distance from p to the closest point of the triangle (a, b, c) (Ericson, Real-Time
 //! Collision Detection, 5.1.5).
 double point_triangle_squared_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
                                        const Eigen::Vector3d& b, const Eigen::Vector3d& c);
 
-//! q = 4 sqrt(3) A / (sum of squared edge lengths) of one triangle.
-double triangle_quality(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                        const Eigen::Vector3d& c);
-
-//! Bar chart of the min-angle histogram (PNG, written atomically).
-void write_quality_histogram_png(const std::filesystem::path& path, const MeshCheckReport& report,
-                                 const std::string& title = "MIN ANGLE PER TRIANGLE [DEG]");
-
-//! Bar chart of binned counts with one label per bin (PNG, written atomically); bins from
-//! `first_good_bin` on are green, the others red. The title and labels use the bitmap font of
-//! draw_text (upper case, digits, punctuation). InvalidInputError if there are no bins or the
-//! labels do not match them.
-void write_histogram_png(const std::filesystem::path& path, std::span<const std::size_t> counts,
-                         const std::vector<std::string>& bin_labels, const std::string& title,
-                         std::size_t first_good_bin);
+//! Bar chart of the checker's min-angle histogram (PNG, written atomically); bins from 30 deg
+//! on are drawn green.
+void write_min_angle_histogram_png(const std::filesystem::path& path, const MeshCheckReport& report,
+                                   const std::string& title = "MIN ANGLE PER TRIANGLE [DEG]");
 
 }  // namespace scanmesh

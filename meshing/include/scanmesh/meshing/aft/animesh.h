@@ -86,13 +86,13 @@ AnimationMesh build_animation_mesh(const RegionGraph& graph, const LineSet& line
 
 struct AnimationMeshQuality {
   double min_angle_deg = 0, max_angle_deg = 0;
-  double mean_q = 0, min_q = 0;  //!< q = 2 r_in / R_circ (1 = equilateral)
+  double mean_radius_ratio = 0, min_radius_ratio = 0;  //!< 2 r_in / R_circ (triangle_quality.h)
   double fraction_min_angle_ge_30 = 0, fraction_min_angle_ge_20 = 0;
   //! Triangles below 20 deg that have a corner where two constraint lines meet at < 20 deg.
   int small_angle_exempt = 0;
   double min_angle_non_exempt_deg = 0;
-  std::array<int, 12> min_angle_histogram{};  //!< 5 deg bins over [0, 60]
-  std::array<int, 10> q_histogram{};          //!< 0.1 bins over [0, 1]
+  std::array<int, 12> min_angle_histogram{};     //!< 5 deg bins over [0, 60]
+  std::array<int, 10> radius_ratio_histogram{};  //!< 0.1 bins over [0, 1]
   std::map<int, int> valence_histogram;
   std::vector<int> triangles_per_region;
   double hausdorff_mesh_to_surface_mm = 0, hausdorff_surface_to_mesh_mm = 0;

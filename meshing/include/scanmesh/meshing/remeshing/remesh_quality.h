@@ -19,8 +19,10 @@ namespace scanmesh::remeshing {
 struct RemeshQuality {
   std::size_t vertices = 0, faces = 0;
   double min_angle_deg = 0, mean_min_angle_deg = 0, fraction_min_angle_ge_30 = 0;
-  double q_mean = 0, q_max = 0;                          //!< Q = R / (2 r), 1 = equilateral
-  std::array<std::size_t, 10> q_histogram{};             //!< bins [1,1.1), [1.1,1.2) ... [1.9, inf)
+  //! Aspect ratio Q = R / (2 r) (triangle_quality.h; 1 = equilateral): mean, largest, and
+  //! faces per bin [1, 1.1), [1.1, 1.2) ... [1.9, inf).
+  double aspect_ratio_mean = 0, aspect_ratio_max = 0;
+  std::array<std::size_t, 10> aspect_ratio_histogram{};
   std::array<std::size_t, 12> angle_histogram{};         //!< min angle, 5 deg bins over [0, 60]
   std::size_t valence_counted = 0, valence_optimal = 0;  //!< free + skeleton vertices
   double fraction_irregular = 0;
@@ -34,9 +36,6 @@ struct RemeshQuality {
   std::size_t self_intersections = 0;
   std::string to_json() const;
 };
-
-//! Q = R / (2 r) of one triangle (infinity when degenerate).
-double aspect_ratio(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c);
 
 //! One-sided sampled distance from `a` to `b`: vertices, edge midpoints and centroids of `a`
 //! projected exactly onto the triangles of `b` (uniform cell grid). Returns {max, mean}.
@@ -53,9 +52,8 @@ RemeshQuality evaluate_remesh(const Mesh& input, const RemeshResult& result,
 Image8 render_quality(const RemeshResult& result, int view_size = 560);
 //! The input coloured by the density's target edge length sqrt(Psi) on a log scale (blue:
 //! shortest, red: longest; the output is densest where blue), two views side by side.
-Image8 render_density(const Mesh& input, const std::vector<double>& density,
-                      int view_size = 560);
-//! Histograms of Q and of the min angle, side by side.
+Image8 render_density(const Mesh& input, const std::vector<double>& density, int view_size = 560);
+//! Histograms of the aspect ratio Q and of the min angle, side by side (1280 x 400).
 Image8 quality_histograms(const RemeshQuality& q);
 
 }  // namespace scanmesh::remeshing
