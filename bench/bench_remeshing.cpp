@@ -128,7 +128,7 @@ int main(int argc, char** argv) {
   std::size_t seam_edges = 0;
   std::map<std::uint64_t, int> ec;
   for (const auto& tr : r.mesh.triangles)
-    for (int i = 0; i < 3; ++i) ++ec[remeshing::edge_key(tr[i], tr[(i + 1) % 3])];
+    for (int i = 0; i < 3; ++i) ++ec[edge_key(tr[i], tr[(i + 1) % 3])];
   for (const auto& [k, c] : ec) seam_edges += c == 3;
   const auto q = remeshing::evaluate_remesh(boxes, r, true);
   std::printf(

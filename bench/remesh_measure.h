@@ -31,15 +31,15 @@ inline double irregular_valence_fraction(const Mesh& out) {
   std::vector<std::vector<int>> nb(out.positions.size());
   for (const auto& t : out.triangles)
     for (int i = 0; i < 3; ++i) {
-      ++ec[remeshing::edge_key(t[i], t[(i + 1) % 3])];
+      ++ec[edge_key(t[i], t[(i + 1) % 3])];
       nb[t[i]].push_back(t[(i + 1) % 3]);
       nb[t[(i + 1) % 3]].push_back(t[i]);
     }
   std::vector<int> boundary(out.positions.size(), 0);
   for (const auto& [k, c] : ec)
     if (c == 1) {
-      ++boundary[remeshing::edge_key_first(k)];
-      ++boundary[remeshing::edge_key_second(k)];
+      ++boundary[edge_key_first(k)];
+      ++boundary[edge_key_second(k)];
     }
   std::size_t counted = 0, optimal = 0;
   for (std::size_t v = 0; v < nb.size(); ++v) {

@@ -5,15 +5,11 @@
 #include <functional>
 #include <unordered_map>
 
+#include "scanmesh/meshing/edge_key.h"
+
 namespace scanmesh {
 
 namespace {
-
-std::uint64_t edge_key(int a, int b) {
-  const auto lo = static_cast<std::uint32_t>(std::min(a, b));
-  const auto hi = static_cast<std::uint32_t>(std::max(a, b));
-  return (static_cast<std::uint64_t>(lo) << 32) | hi;
-}
 
 struct EdgeUse {
   int faces = 0;

@@ -15,15 +15,10 @@
 #include <vector>
 
 #include "scanmesh/meshing/aft/animesh.h"
+#include "scanmesh/meshing/edge_key.h"
 #include "scanmesh/reconstruction/scan_surface.h"
 
 namespace scanmesh::aft::detail {
-
-//! Key of the undirected edge {a, b}.
-inline std::uint64_t ukey(int a, int b) {
-  if (a > b) std::swap(a, b);
-  return (static_cast<std::uint64_t>(a) << 32) | static_cast<std::uint32_t>(b);
-}
 
 //! std::remainder(d, 2 pi), the angle difference d wrapped into [-pi, pi], bit for bit, with the
 //! common case |d| <= pi (where the answer is d) first: remainder's rounding-mode bookkeeping

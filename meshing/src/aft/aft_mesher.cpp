@@ -47,11 +47,6 @@ Vector2d param_of(const Vector3d& x, double near_phi) {
 
 namespace {
 
-std::uint64_t edge_key(int a, int b) {
-  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) |
-         static_cast<std::uint32_t>(b);
-}
-
 double cross2(const Vector2d& a, const Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
 
 // Proper crossing of segments p1-p2 and q1-q2 (touching at an end point does not count).
@@ -282,16 +277,16 @@ class Mesher {
   void add_edge(int a, int b) {
     const int id = static_cast<int>(edges_.size());
     edges_.push_back({a, b, true, (N_.pos[b] - N_.pos[a]).norm()});
-    index_[edge_key(a, b)] = id;
+    index_[directed_edge_key(a, b)] = id;
     bucket(id);
     push(id);
   }
   void kill(int id) {
     edges_[id].alive = false;
-    index_.erase(edge_key(edges_[id].a, edges_[id].b));
+    index_.erase(directed_edge_key(edges_[id].a, edges_[id].b));
   }
   int find(int a, int b) const {
-    const auto it = index_.find(edge_key(a, b));
+    const auto it = index_.find(directed_edge_key(a, b));
     return it == index_.end() ? -1 : it->second;
   }
   void push(int id) {

@@ -22,7 +22,6 @@ namespace scanmesh::aft {
 
 using detail::angle_at;
 using detail::min_angle;
-using detail::ukey;
 using detail::wrap_angle;
 using Eigen::Vector2d;
 using Eigen::Vector3d;
@@ -102,13 +101,13 @@ class FlipMesh {
     adj_.reserve(2 * T.size());
     for (std::size_t t = 0; t < T.size(); ++t)
       for (int k = 0; k < 3; ++k) {
-        auto& e = adj_.try_emplace(ukey(T[t][k], T[t][(k + 1) % 3]), std::array<int, 2>{-1, -1})
+        auto& e = adj_.try_emplace(edge_key(T[t][k], T[t][(k + 1) % 3]), std::array<int, 2>{-1, -1})
                       .first->second;
         (e[0] < 0 ? e[0] : e[1]) = static_cast<int>(t);
       }
   }
   const std::unordered_map<std::uint64_t, std::array<int, 2>>& edges() const { return adj_; }
-  bool has_edge(int x, int y) const { return adj_.count(ukey(x, y)) > 0; }
+  bool has_edge(int x, int y) const { return adj_.count(edge_key(x, y)) > 0; }
 
   // The quad of edge `key` if a flip may change it: not a constraint, and the diagonal r-s not
   // already an edge elsewhere.
@@ -145,11 +144,11 @@ class FlipMesh {
   void flip(const Quad& f) {
     T_[f.t1] = {f.r, f.a, f.s};
     T_[f.t2] = {f.s, f.b, f.r};
-    adj_.erase(ukey(f.a, f.b));
-    adj_[ukey(f.r, f.s)] = {f.t1, f.t2};
+    adj_.erase(edge_key(f.a, f.b));
+    adj_[edge_key(f.r, f.s)] = {f.t1, f.t2};
     // the outer edges a-s (was in t2) and b-r (was in t1) change owners
     const auto reown = [&](int x, int y, int from, int to) {
-      for (int& t : adj_[ukey(x, y)])
+      for (int& t : adj_[edge_key(x, y)])
         if (t == from) t = to;
     };
     reown(f.a, f.s, f.t2, f.t1);
@@ -209,7 +208,7 @@ int delaunay_flips(std::vector<std::array<int, 3>>& T, const std::vector<Vector3
       if (!f) continue;
       const auto [a, b, r, s, t1, t2] = *f;
       if (mesh.has_edge(r, s)) {
-        blocked_by[ukey(r, s)].push_back(key);
+        blocked_by[edge_key(r, s)].push_back(key);
         continue;
       }
       if (min_angle_after(P, *f) <= min_angle_before(P, *f) + 1e-6) continue;
@@ -223,7 +222,8 @@ int delaunay_flips(std::vector<std::array<int, 3>>& T, const std::vector<Vector3
       mesh.flip(*f);
       guard.changed(t1);
       guard.changed(t2);
-      for (const std::uint64_t k : {ukey(r, s), ukey(a, s), ukey(s, b), ukey(b, r), ukey(r, a)})
+      for (const std::uint64_t k :
+           {edge_key(r, s), edge_key(a, s), edge_key(s, b), edge_key(b, r), edge_key(r, a)})
         dirty.push_back(k);
       if (const auto bl = blocked_by.find(key); bl != blocked_by.end()) {
         dirty.insert(dirty.end(), bl->second.begin(), bl->second.end());
@@ -620,7 +620,7 @@ std::unordered_set<std::uint64_t> segment_constraint_edges(const SegmentNodes& s
   std::unordered_set<std::uint64_t> constraint;
   for (const auto& chain : seg.chains)
     for (std::size_t k = 0; k + 1 < chain.size(); ++k)
-      constraint.insert(ukey(chain[k], chain[k + 1]));
+      constraint.insert(edge_key(chain[k], chain[k + 1]));
   return constraint;
 }
 
@@ -1055,7 +1055,7 @@ AnimationMeshQuality evaluate_quality(const AnimationMesh& am, const ScanSurface
   const auto& P = am.mesh.positions;
   const auto& T = am.mesh.triangles;
   std::unordered_set<std::uint64_t> line_edge;
-  for (const auto& e : am.line_edges) line_edge.insert(ukey(e[0], e[1]));
+  for (const auto& e : am.line_edges) line_edge.insert(edge_key(e[0], e[1]));
   q.min_angle_deg = 180;
   q.min_angle_non_exempt_deg = 180;
   q.min_radius_ratio = 1;
@@ -1071,8 +1071,8 @@ AnimationMeshQuality evaluate_quality(const AnimationMesh& am, const ScanSurface
                  mx = *std::max_element(ang.begin(), ang.end()) * 180 / M_PI;
     q.min_angle_deg = std::min(q.min_angle_deg, mn);
     q.max_angle_deg = std::max(q.max_angle_deg, mx);
-    const bool exempt = mn < 20 && line_edge.count(ukey(f[kmin], f[(kmin + 1) % 3])) &&
-                        line_edge.count(ukey(f[kmin], f[(kmin + 2) % 3]));
+    const bool exempt = mn < 20 && line_edge.count(edge_key(f[kmin], f[(kmin + 1) % 3])) &&
+                        line_edge.count(edge_key(f[kmin], f[(kmin + 2) % 3]));
     if (exempt)
       ++q.small_angle_exempt;
     else
@@ -1084,7 +1084,7 @@ AnimationMeshQuality evaluate_quality(const AnimationMesh& am, const ScanSurface
     q.mean_radius_ratio += rho;
     q.min_radius_ratio = std::min(q.min_radius_ratio, rho);
     q.radius_ratio_histogram[std::clamp(static_cast<int>(rho * 10), 0, 9)]++;
-    for (int k = 0; k < 3; ++k) edges.insert(ukey(f[k], f[(k + 1) % 3]));
+    for (int k = 0; k < 3; ++k) edges.insert(edge_key(f[k], f[(k + 1) % 3]));
     const int label = t < am.mesh.face_labels.size() ? am.mesh.face_labels[t] : 0;
     if (label >= static_cast<int>(q.triangles_per_region.size()))
       q.triangles_per_region.resize(label + 1);

@@ -154,7 +154,7 @@ class Repair {
         k = i;
       }
     }
-    return C_.count(ukey(f[k], f[(k + 1) % 3])) && C_.count(ukey(f[k], f[(k + 2) % 3]));
+    return C_.count(edge_key(f[k], f[(k + 1) % 3])) && C_.count(edge_key(f[k], f[(k + 2) % 3]));
   }
 
   RepairStats run(double goal, double report, int rounds) {
@@ -372,7 +372,7 @@ class Repair {
 
   // Edge p-q of two triangles (p, q, r) and (q, p, s) becomes r-s.
   bool flip(int p, int q) {
-    if (C_.count(ukey(p, q))) return false;
+    if (C_.count(edge_key(p, q))) return false;
     const auto ts = edge_tris(p, q);
     if (ts.size() != 2 || L_[ts[0]] != L_[ts[1]]) return false;
     int t1 = ts[0], t2 = ts[1];
@@ -423,7 +423,7 @@ class Repair {
 
   // A new surface point on edge p-q (not a constraint), both triangles split in two.
   int split(int p, int q) {
-    if (C_.count(ukey(p, q))) return -1;
+    if (C_.count(edge_key(p, q))) return -1;
     const auto ts = edge_tris(p, q);
     if (ts.size() != 2) return -1;
     const int m = add_vertex(0.5 * (S_.pos[p] + S_.pos[q]), S_.params[p].x());

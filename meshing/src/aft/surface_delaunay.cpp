@@ -204,30 +204,24 @@ class SurfaceDelaunayMesher {
 
   // ---- the triangulation on the surface (after the plane CDT start) ----------------------
 
-  static std::uint64_t key(int a, int b) {
-    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) |
-           static_cast<std::uint32_t>(b);
-  }
-  static std::uint64_t ukey(int a, int b) { return a < b ? key(a, b) : key(b, a); }
-
   void set_triangle(int t, const std::array<int, 3>& v) {
     tris_[t] = v;
-    for (int k = 0; k < 3; ++k) owner_[key(v[k], v[(k + 1) % 3])] = t;
+    for (int k = 0; k < 3; ++k) owner_[directed_edge_key(v[k], v[(k + 1) % 3])] = t;
   }
   void drop_edges(int t) {
     const auto& v = tris_[t];
-    for (int k = 0; k < 3; ++k) owner_.erase(key(v[k], v[(k + 1) % 3]));
+    for (int k = 0; k < 3; ++k) owner_.erase(directed_edge_key(v[k], v[(k + 1) % 3]));
   }
   //! The triangle on the other side of directed edge (a, b): the owner of (b, a), or -1.
   int across(int a, int b) const {
-    const auto it = owner_.find(key(b, a));
+    const auto it = owner_.find(directed_edge_key(b, a));
     return it == owner_.end() ? -1 : it->second;
   }
-  bool constrained(int a, int b) const { return constraint_.count(ukey(a, b)) > 0; }
+  bool constrained(int a, int b) const { return constraint_.count(edge_key(a, b)) > 0; }
 
   bool build_surface_triangulation() {
     for (const auto& e : in_.front)
-      if (constraint_.insert(ukey(e[0], e[1])).second) segment_edges_.push_back({e[0], e[1]});
+      if (constraint_.insert(edge_key(e[0], e[1])).second) segment_edges_.push_back({e[0], e[1]});
     const auto domain = domain_faces();
     if (!domain) return false;
     const std::vector<std::array<int, 3>>& start = *domain;
@@ -236,7 +230,7 @@ class SurfaceDelaunayMesher {
     std::vector<std::uint64_t> all;
     for (const auto& kv : owner_)
       all.push_back(
-          ukey(static_cast<int>(kv.first >> 32), static_cast<int>(kv.first & 0xffffffffu)));
+          edge_key(static_cast<int>(kv.first >> 32), static_cast<int>(kv.first & 0xffffffffu)));
     std::sort(all.begin(), all.end());
     all.erase(std::unique(all.begin(), all.end()), all.end());
     lawson_flips(all);
@@ -253,13 +247,16 @@ class SurfaceDelaunayMesher {
   // angle rule, Delaunay's in the plane) and both new triangles face outwards.
   bool flip_if_better(int a, int b, std::vector<std::uint64_t>& queue) {
     if (constrained(a, b)) return false;
-    int t1 = owner_.count(key(a, b)) ? owner_.at(key(a, b)) : -1;
-    if (t1 < 0) std::swap(a, b), t1 = owner_.count(key(a, b)) ? owner_.at(key(a, b)) : -1;
+    int t1 = owner_.count(directed_edge_key(a, b)) ? owner_.at(directed_edge_key(a, b)) : -1;
+    if (t1 < 0)
+      std::swap(a, b),
+          t1 = owner_.count(directed_edge_key(a, b)) ? owner_.at(directed_edge_key(a, b)) : -1;
     if (t1 < 0) return false;
     const int t2 = across(a, b);
     if (t2 < 0) return false;
     const int c = third(t1, a, b), d = third(t2, b, a);
-    if (c < 0 || d < 0 || c == d || owner_.count(key(c, d)) || owner_.count(key(d, c)))
+    if (c < 0 || d < 0 || c == d || owner_.count(directed_edge_key(c, d)) ||
+        owner_.count(directed_edge_key(d, c)))
       return false;
     const auto& P = N_.pos;
     const double before = std::min(min_angle(P[a], P[b], P[c]), min_angle(P[b], P[a], P[d]));
@@ -271,7 +268,7 @@ class SurfaceDelaunayMesher {
     set_triangle(t1, {c, a, d});
     set_triangle(t2, {d, b, c});
     for (const auto& [x, y] : {std::pair{a, d}, {d, b}, {b, c}, {c, a}})
-      queue.push_back(ukey(x, y));
+      queue.push_back(edge_key(x, y));
     return true;
   }
 
@@ -421,7 +418,7 @@ class SurfaceDelaunayMesher {
     set_triangle(host, {h[0], h[1], p});
     push_triangle({h[1], h[2], p});
     push_triangle({h[2], h[0], p});
-    lawson_flips({ukey(h[0], h[1]), ukey(h[1], h[2]), ukey(h[2], h[0])});
+    lawson_flips({edge_key(h[0], h[1]), edge_key(h[1], h[2]), edge_key(h[2], h[0])});
     return true;
   }
 
@@ -440,7 +437,7 @@ class SurfaceDelaunayMesher {
     set_triangle(u, {p, b, c});
     push_triangle({b, p, d});
     push_triangle({p, a, d});
-    lawson_flips({ukey(a, c), ukey(c, b), ukey(b, d), ukey(d, a)});
+    lawson_flips({edge_key(a, c), edge_key(c, b), edge_key(b, d), edge_key(d, a)});
     return true;
   }
 
@@ -580,7 +577,7 @@ class SurfaceDelaunayMesher {
       rejected_ = 0;
       for (const Candidate& c : bad) {
         if (inserted_ >= budget_) break;
-        const auto it = owner_.find(key(c.nodes[0], c.nodes[1]));
+        const auto it = owner_.find(directed_edge_key(c.nodes[0], c.nodes[1]));
         if (it == owner_.end() || third(it->second, c.nodes[0], c.nodes[1]) != c.nodes[2])
           continue;  // changed by an earlier insertion of this pass
         if (try_insert(it->second, c.radius)) {
@@ -644,7 +641,7 @@ class SurfaceDelaunayMesher {
       }
       std::vector<std::uint64_t> all;
       for (const auto& t : tris_)
-        for (int k = 0; k < 3; ++k) all.push_back(ukey(t[k], t[(k + 1) % 3]));
+        for (int k = 0; k < 3; ++k) all.push_back(edge_key(t[k], t[(k + 1) % 3]));
       std::sort(all.begin(), all.end());
       all.erase(std::unique(all.begin(), all.end()), all.end());
       lawson_flips(all);

@@ -10,6 +10,7 @@
 #include <unordered_set>
 
 #include "scanmesh/core/errors.h"
+#include "scanmesh/meshing/edge_key.h"
 #include "scanmesh/meshing/mesh_topology.h"
 #include "scanmesh/meshing/particles/particles.h"
 
@@ -21,13 +22,6 @@ namespace {
 
 // Decision 44: untangling moves after which a particle stops following its springs.
 constexpr int kUntanglesBeforeSettling = 3;
-
-std::uint64_t edge_key(int a, int b) {
-  if (a > b) std::swap(a, b);
-  return (static_cast<std::uint64_t>(a) << 32) | static_cast<std::uint32_t>(b);
-}
-int key_lo(std::uint64_t k) { return static_cast<int>(k >> 32); }
-int key_hi(std::uint64_t k) { return static_cast<int>(k & 0xffffffffu); }
 
 struct Spring {
   double rest = 1.0;
@@ -188,9 +182,6 @@ struct SpringNetwork::Impl {
     if (it != springs.end()) it->second.mark_iter = iter;
   }
   bool marked(const Spring& s) const { return s.mark_iter >= iter - 1; }
-  static std::uint64_t edge_key_directed(int a, int b) {
-    return (static_cast<std::uint64_t>(a) << 32) | static_cast<std::uint32_t>(b);
-  }
 
   // Rebuilds the spring map from the faces, keeping the data of springs that still exist.
   void rebuild_springs() {
@@ -228,7 +219,7 @@ struct SpringNetwork::Impl {
     std::unordered_map<std::uint64_t, Spring> ns;
     ns.reserve(springs.size());
     for (const auto& [k, s] : springs) {
-      const int a = vmap[key_lo(k)], b = vmap[key_hi(k)];
+      const int a = vmap[edge_key_first(k)], b = vmap[edge_key_second(k)];
       if (a >= 0 && b >= 0) ns.emplace(edge_key(a, b), s);
     }
     verts = std::move(nv);
@@ -633,7 +624,7 @@ struct SpringNetwork::Impl {
       for (std::uint64_t k : keys) {
         const auto it = springs.find(k);
         if (it == springs.end() || it->second.topo) continue;
-        const int a = key_lo(k), b = key_hi(k);
+        const int a = edge_key_first(k), b = edge_key_second(k);
         const auto ef = edge_faces(a, b);
         if (ef.size() != 2) continue;
         const int c = opposite(ef[0], a, b), d = opposite(ef[1], a, b);
@@ -665,7 +656,7 @@ struct SpringNetwork::Impl {
   int change_count(int delta, const ImplicitSurface& surface) {
     std::vector<std::pair<double, std::uint64_t>> order;
     for (const auto& [k, sp] : springs)
-      order.emplace_back(length(key_lo(k), key_hi(k)) / sp.rest, k);
+      order.emplace_back(length(edge_key_first(k), edge_key_second(k)) / sp.rest, k);
     std::sort(order.begin(), order.end());
     if (delta > 0) std::reverse(order.begin(), order.end());
     const int wanted = std::abs(delta);
@@ -675,7 +666,7 @@ struct SpringNetwork::Impl {
       const auto it = springs.find(k);
       if (it == springs.end() || marked(it->second) || it->second.topo || it->second.special)
         continue;
-      const int a = key_lo(k), b = key_hi(k);
+      const int a = edge_key_first(k), b = edge_key_second(k);
       if (delta < 0 ? try_collapse(a, b) : try_split(a, b, surface)) ++done;
     }
     return done;
@@ -687,7 +678,8 @@ struct SpringNetwork::Impl {
   }
   double mean_stretch() const {
     double sum = 0.0;
-    for (const auto& [k, sp] : springs) sum += length(key_lo(k), key_hi(k)) / sp.rest;
+    for (const auto& [k, sp] : springs)
+      sum += length(edge_key_first(k), edge_key_second(k)) / sp.rest;
     return springs.empty() ? 1.0 : sum / static_cast<double>(springs.size());
   }
 
@@ -698,7 +690,7 @@ struct SpringNetwork::Impl {
     std::vector<std::pair<Spring*, double>> cosines;
     cosines.reserve(springs.size());
     for (auto& [k, s] : springs) {
-      const Vertex &va = verts[key_lo(k)], &vb = verts[key_hi(k)];
+      const Vertex &va = verts[edge_key_first(k)], &vb = verts[edge_key_second(k)];
       if (!va.defined || !vb.defined) continue;
       const double na = va.f.gradient.norm(), nb = vb.f.gradient.norm();
       if (!(na > 0.0 && nb > 0.0)) continue;
@@ -725,11 +717,11 @@ struct SpringNetwork::Impl {
     std::vector<int> vcount(verts.size(), 0);
     for (const auto& [k, s] : springs) {
       if (s.special || s.topo) continue;
-      for (int v : {key_lo(k), key_hi(k)}) vsum[v] += s.rest, ++vcount[v];
+      for (int v : {edge_key_first(k), edge_key_second(k)}) vsum[v] += s.rest, ++vcount[v];
     }
     for (auto& [k, s] : springs) {
       if (s.special || s.topo) continue;
-      const int a = key_lo(k), b = key_hi(k);
+      const int a = edge_key_first(k), b = edge_key_second(k);
       s.rest = 0.5 * (vsum[a] / vcount[a] + vsum[b] / vcount[b]);
     }
   }
@@ -740,7 +732,7 @@ struct SpringNetwork::Impl {
     const double cos_eps = std::cos(o.gap_angle_deg * std::numbers::pi / 180.0);
     for (auto& [k, s] : springs) {
       if (s.topo) continue;
-      const Vertex &va = verts[key_lo(k)], &vb = verts[key_hi(k)];
+      const Vertex &va = verts[edge_key_first(k)], &vb = verts[edge_key_second(k)];
       if (!va.defined || !vb.defined) continue;
       const Vector3d ga = va.f.gradient, gb = vb.f.gradient;
       const Vector3d r = va.p - vb.p;
@@ -922,14 +914,14 @@ struct SpringNetwork::Impl {
     for (std::uint64_t k : keys) {
       const auto it = springs.find(k);
       if (it == springs.end() || it->second.topo || it->second.special) continue;
-      const int a = key_lo(k), b = key_hi(k);
+      const int a = edge_key_first(k), b = edge_key_second(k);
       if (length(a, b) > 4.0 / 3.0 * it->second.rest && try_split(a, b, surface)) ++changes;
     }
     sorted_keys();
     for (std::uint64_t k : keys) {
       const auto it = springs.find(k);
       if (it == springs.end() || it->second.topo || it->second.special) continue;
-      const int a = key_lo(k), b = key_hi(k);
+      const int a = edge_key_first(k), b = edge_key_second(k);
       const double rest = it->second.rest;
       if (length(a, b) < 0.8 * rest && collapse_keeps_short(a, b, 4.0 / 3.0 * rest) &&
           try_collapse(a, b))
@@ -939,7 +931,7 @@ struct SpringNetwork::Impl {
     for (std::uint64_t k : keys) {
       const auto it = springs.find(k);
       if (it == springs.end() || it->second.topo) continue;
-      if (try_flip(key_lo(k), key_hi(k))) ++changes;
+      if (try_flip(edge_key_first(k), edge_key_second(k))) ++changes;
     }
     smooth(surface, 1.0);
     return changes;
@@ -1097,10 +1089,10 @@ struct SpringNetwork::Impl {
       std::unordered_set<std::uint64_t> half;
       for (const Face& f : faces)
         if (f.alive)
-          for (int k = 0; k < 3; ++k) half.insert(edge_key_directed(f.v[k], f.v[(k + 1) % 3]));
+          for (int k = 0; k < 3; ++k) half.insert(directed_edge_key(f.v[k], f.v[(k + 1) % 3]));
       for (std::uint64_t h : half) {
         const int x = static_cast<int>(h >> 32), y = static_cast<int>(h & 0xffffffffu);
-        if (half.count(edge_key_directed(y, x))) continue;
+        if (half.count(directed_edge_key(y, x))) continue;
         if (verts[x].boundary && verts[y].boundary) continue;  // an original border (scan)
         next[x].push_back(y);
       }
@@ -1394,11 +1386,11 @@ SpringNetwork::SpringNetwork(const Mesh& start, const ParticleOptions& options)
   // Every edge: at most two faces, traversed in opposite directions.
   std::unordered_map<std::uint64_t, int> count;
   for (const auto& t : start.triangles)
-    for (int k = 0; k < 3; ++k) ++count[m.edge_key_directed(t[k], t[(k + 1) % 3])];
+    for (int k = 0; k < 3; ++k) ++count[directed_edge_key(t[k], t[(k + 1) % 3])];
   for (const auto& [k, n] : count) {
     const int a = static_cast<int>(k >> 32), b = static_cast<int>(k & 0xffffffffu);
     if (n > 1) throw InvalidInputError("particles: start mesh is not consistently oriented");
-    if (!count.count(m.edge_key_directed(b, a))) m.verts[a].boundary = m.verts[b].boundary = true;
+    if (!count.count(directed_edge_key(b, a))) m.verts[a].boundary = m.verts[b].boundary = true;
   }
   for (auto& v : m.verts) {
     if (v.faces.empty()) v.alive = false, ++m.dead_verts;
@@ -1443,7 +1435,7 @@ void SpringNetwork::Impl::mark_topology_change(const ImplicitSurface& surface, S
 std::vector<Vector3d> SpringNetwork::Impl::spring_forces() const {
   std::vector<Vector3d> force(verts.size(), Vector3d::Zero());
   for (const auto& [k, s] : springs) {
-    const int a = key_lo(k), b = key_hi(k);
+    const int a = edge_key_first(k), b = edge_key_second(k);
     const Vector3d r = P(a) - P(b);
     const double l = r.norm();
     // Eq. (12) with an optional stiffening for moderate strains (an addition,
@@ -1555,7 +1547,7 @@ void SpringNetwork::Impl::damp_reversing_move(Vertex& v, Vector3d& move) {
 SpringNetwork::Impl::StepCandidates SpringNetwork::Impl::step_candidates() const {
   std::vector<std::uint64_t> special_short, rule_candidates;
   for (const auto& [k, s] : springs) {
-    const double l = length(key_lo(k), key_hi(k));
+    const double l = length(edge_key_first(k), edge_key_second(k));
     if (s.special && l < o.special_min_length * R()) special_short.push_back(k);
     if (l < o.d_min * s.rest || (l > o.d_max * s.rest && !s.topo && !s.special))
       rule_candidates.push_back(k);
@@ -1571,7 +1563,7 @@ void SpringNetwork::Impl::collapse_short_special_springs(
   for (std::uint64_t k : special_short) {
     const auto it = springs.find(k);
     if (it == springs.end() || !it->second.special) continue;
-    const int a = key_lo(k), b = key_hi(k);
+    const int a = edge_key_first(k), b = edge_key_second(k);
     if (!verts[a].alive || !verts[b].alive) continue;
     if (length(a, b) < o.special_min_length * R() && try_collapse(a, b)) ++rep.special_collapses;
   }
@@ -1585,7 +1577,7 @@ void SpringNetwork::Impl::collapse_or_split_springs(
     const auto it = springs.find(k);
     if (it == springs.end()) continue;
     const Spring s = it->second;
-    const int a = key_lo(k), b = key_hi(k);
+    const int a = edge_key_first(k), b = edge_key_second(k);
     if (marked(s)) continue;
     const double l = length(a, b);
     if (std::abs(s.old_length - l) > o.moving_epsilon * s.rest) continue;  // still moving
@@ -1603,7 +1595,7 @@ void SpringNetwork::Impl::flip_unmarked_springs(StepReport& rep) {
   for (std::uint64_t k : keys) {
     const auto it = springs.find(k);
     if (it == springs.end() || marked(it->second) || it->second.topo) continue;
-    if (try_flip(key_lo(k), key_hi(k))) ++rep.flips;
+    if (try_flip(edge_key_first(k), edge_key_second(k))) ++rep.flips;
   }
 }
 
@@ -1646,7 +1638,7 @@ void SpringNetwork::Impl::drop_lost_particles(const ImplicitSurface& surface, St
 
 // |r|_alt of eq. (16) for the next step's "still moving" test.
 void SpringNetwork::Impl::store_old_lengths() {
-  for (auto& [k, s] : springs) s.old_length = length(key_lo(k), key_hi(k));
+  for (auto& [k, s] : springs) s.old_length = length(edge_key_first(k), edge_key_second(k));
 }
 
 StepReport SpringNetwork::step(const ImplicitSurface& surface, double surface_time_step) {
@@ -1798,7 +1790,7 @@ void SpringNetwork::project(const ImplicitSurface& surface) {
         q && (*q - v.p).norm() < m.o.edge_length)
       v.p = *q;
   }
-  for (auto& [k, s] : m.springs) s.old_length = m.length(key_lo(k), key_hi(k));
+  for (auto& [k, s] : m.springs) s.old_length = m.length(edge_key_first(k), edge_key_second(k));
 }
 
 Mesh SpringNetwork::mesh() const {

@@ -11,17 +11,9 @@
 #include <vector>
 
 #include "scanmesh/core/mesh.h"
+#include "scanmesh/meshing/edge_key.h"
 
 namespace scanmesh::remeshing {
-
-//! Order-independent key of the edge (v, w).
-inline std::uint64_t edge_key(int v, int w) {
-  const auto a = static_cast<std::uint64_t>(v < w ? v : w);
-  const auto b = static_cast<std::uint64_t>(v < w ? w : v);
-  return (a << 32) | b;
-}
-inline int edge_key_first(std::uint64_t k) { return static_cast<int>(k >> 32); }
-inline int edge_key_second(std::uint64_t k) { return static_cast<int>(k & 0xffffffffu); }
 
 //! A short list of indices held inline, spilling to the heap past N: what edge_faces and
 //! neighbours return. A remesh asks for them millions of times, and a std::vector each was
@@ -51,7 +43,7 @@ class SmallIndexList {
   std::vector<int> heap_;
   std::size_t n_ = 0;
 };
-using EdgeFaceList = SmallIndexList<6>;   //!< two faces per manifold edge, a few on a seam
+using EdgeFaceList = SmallIndexList<6>;    //!< two faces per manifold edge, a few on a seam
 using NeighbourList = SmallIndexList<16>;  //!< a ring
 
 class NmMesh {
