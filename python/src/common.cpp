@@ -126,6 +126,15 @@ std::vector<Rgb8> to_rgb(py::handle array, const char* name) {
   return out;
 }
 
+PointCloud to_cloud(py::handle positions, const char* name, py::handle normals, py::handle colors) {
+  PointCloud cloud;
+  cloud.positions = to_vec3d(positions, name);
+  cloud.width = static_cast<int>(cloud.positions.size());
+  if (!normals.is_none()) cloud.normals = to_vec3f(normals, "normals");
+  if (!colors.is_none()) cloud.colors = to_rgb(colors, "colors");
+  return cloud;
+}
+
 py::array_t<double, py::array::c_style> to_double_array(py::handle array, const char* name,
                                                         std::vector<py::ssize_t> shape) {
   py::array raw = py::array::ensure(array);

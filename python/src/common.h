@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "scanmesh/core/color.h"
+#include "scanmesh/core/point_cloud_io.h"
 
 namespace scanmesh::python {
 
@@ -64,6 +65,42 @@ py::array owned(std::vector<T>&& values, std::vector<py::ssize_t> shape,
   return view(owner, heap->data(), std::move(shape), true, dtype);
 }
 
+//! Sets dict["name"] = object.name for every member name listed, in the listed order (the order
+//! of the dict's keys): the library's result structs as the dicts Python gets, each member named
+//! once, so that a key cannot drift from its member. Members under another key, or computed,
+//! are set apart.
+//! C++ has no reflection: turning a member's name into its key takes the preprocessor.
+#define SCANMESH_PUT_FIELDS(dict, object, ...)                         \
+  do {                                                                 \
+    SCANMESH_FOR_EACH_(SCANMESH_PUT_FIELD_, dict, object, __VA_ARGS__) \
+  } while (false)
+#define SCANMESH_PUT_FIELD_(dict, object, name) dict[#name] = (object).name;
+
+//! Sets object.name = name for every name listed: the keyword arguments of a binding into the
+//! library's options struct, where each argument carries its member's name.
+#define SCANMESH_SET_FIELDS(object, ...)                                 \
+  do {                                                                   \
+    SCANMESH_FOR_EACH_(SCANMESH_SET_FIELD_, object, unused, __VA_ARGS__) \
+  } while (false)
+#define SCANMESH_SET_FIELD_(object, unused, name) (object).name = name;
+
+// SCANMESH_FOR_EACH_(m, a, b, x1, x2, ...) is m(a, b, x1) m(a, b, x2) ...: the C++20 __VA_OPT__
+// recursion, one step per rescan of SCANMESH_EXPAND_ (enough for 86 names; more leave an
+// unexpanded SCANMESH_FOR_EACH_AGAIN_ behind: a compile error, not a silently shorter dict).
+#define SCANMESH_FOR_EACH_(m, a, b, ...) \
+  __VA_OPT__(SCANMESH_EXPAND_(SCANMESH_FOR_EACH_STEP_(m, a, b, __VA_ARGS__)))
+#define SCANMESH_FOR_EACH_STEP_(m, a, b, x, ...) \
+  m(a, b, x) __VA_OPT__(SCANMESH_FOR_EACH_AGAIN_ SCANMESH_PARENS_(m, a, b, __VA_ARGS__))
+#define SCANMESH_FOR_EACH_AGAIN_() SCANMESH_FOR_EACH_STEP_
+#define SCANMESH_PARENS_ ()
+#define SCANMESH_EXPAND_(...) \
+  SCANMESH_EXPAND16_(SCANMESH_EXPAND16_(SCANMESH_EXPAND16_(SCANMESH_EXPAND16_(__VA_ARGS__))))
+#define SCANMESH_EXPAND16_(...) \
+  SCANMESH_EXPAND4_(SCANMESH_EXPAND4_(SCANMESH_EXPAND4_(SCANMESH_EXPAND4_(__VA_ARGS__))))
+#define SCANMESH_EXPAND4_(...) \
+  SCANMESH_EXPAND1_(SCANMESH_EXPAND1_(SCANMESH_EXPAND1_(SCANMESH_EXPAND1_(__VA_ARGS__))))
+#define SCANMESH_EXPAND1_(...) __VA_ARGS__
+
 //! Raises ValueError("<what>: <problem>").
 [[noreturn]] void value_error(const std::string& message);
 
@@ -77,6 +114,11 @@ std::vector<std::array<int, 3>> to_int3(py::handle array, const char* name, bool
 std::vector<int> to_ints(py::handle array, const char* name);
 //! An N x 3 integer array of 0..255.
 std::vector<Rgb8> to_rgb(py::handle array, const char* name);
+//! An unorganised cloud (width: the number of points) of an (N, 3) array of positions, with
+//! normals and colours unless None. Whether they have a row per position is the caller's check:
+//! each binding words that error its own way.
+PointCloud to_cloud(py::handle positions, const char* name, py::handle normals = py::none(),
+                    py::handle colors = py::none());
 //! A float64 array of exactly the given shape (copied, converted).
 py::array_t<double, py::array::c_style> to_double_array(py::handle array, const char* name,
                                                         std::vector<py::ssize_t> shape);

@@ -79,18 +79,51 @@ RangeGrid grid_from_arrays(py::handle radius, py::handle valid, py::handle confi
 
 py::dict cleaning_report(const CleaningReport& r) {
   py::dict d;
-  d["valid_before"] = r.valid_before;
-  d["valid_after"] = r.valid_after;
-  d["spikes_removed"] = r.spikes_removed;
-  d["fragments_removed"] = r.fragments_removed;
-  d["fragment_cells_removed"] = r.fragment_cells_removed;
-  d["components_kept"] = r.components_kept;
+  SCANMESH_PUT_FIELDS(d, r, valid_before, valid_after, spikes_removed, fragments_removed,
+                      fragment_cells_removed, components_kept);
   return d;
 }
 
-py::array fields_plane3(py::handle self, const std::vector<Eigen::Vector3f>& v,
-                        const SurfaceFields& f) {
-  return view(self, v.empty() ? nullptr : v.data()->data(), {f.n_h, f.n_phi, 3});
+// Read-only views of per-cell arrays in the grid's layout, kept alive by `owner`: numbers as
+// (n_h, n_phi), flags as bool (n_h, n_phi), vectors as (n_h, n_phi, 3).
+py::array cells_view(py::handle owner, const std::vector<float>& numbers, py::ssize_t n_h,
+                     py::ssize_t n_phi) {
+  return view(owner, numbers.data(), {n_h, n_phi});
+}
+py::array cells_view(py::handle owner, const std::vector<std::uint8_t>& flags, py::ssize_t n_h,
+                     py::ssize_t n_phi) {
+  return view(owner, flags.data(), {n_h, n_phi}, false, py::dtype("bool"));
+}
+py::array cells_view(py::handle owner, const std::vector<Eigen::Vector3f>& vectors, py::ssize_t n_h,
+                     py::ssize_t n_phi) {
+  return view(owner, vectors.empty() ? nullptr : vectors.data()->data(), {n_h, n_phi, 3});
+}
+
+// A new array of `shape` (C order) whose cell k holds value_at(k), for the first `cells` k
+// (Index: what value_at takes, the grid's int or the fields' std::size_t).
+template <typename Index, typename ValueAt>
+py::array tabulated(Index cells, std::vector<py::ssize_t> shape, ValueAt value_at) {
+  std::vector<decltype(value_at(cells))> v(static_cast<std::size_t>(cells));
+  for (Index k = 0; k < cells; ++k) v[static_cast<std::size_t>(k)] = value_at(k);
+  return owned(std::move(v), std::move(shape));
+}
+
+// The getter of a read-only view of one of the grid's planes (all but the writable colours).
+template <typename T>
+auto plane_property(const std::vector<T>& (RangeGrid::*plane)() const) {
+  return [plane](py::object self) {
+    const auto& g = self.cast<const RangeGrid&>();
+    return cells_view(self, (g.*plane)(), rows(g), cols(g));
+  };
+}
+
+// The getter of a read-only view of one of the per-cell arrays of SurfaceFields.
+template <typename T>
+auto fields_property(std::vector<T> SurfaceFields::*cells) {
+  return [cells](py::object self) {
+    const auto& f = self.cast<const SurfaceFields&>();
+    return cells_view(self, f.*cells, f.n_h, f.n_phi);
+  };
 }
 
 }  // namespace
@@ -153,39 +186,22 @@ clamped to [0, 1] as RangeGrid::set_sample does (non-finite: 0). `color` is (n_h
       .def(
           "phis",
           [](const RangeGrid& g) {
-            std::vector<double> v(static_cast<std::size_t>(g.n_phi()));
-            for (int i = 0; i < g.n_phi(); ++i) v[static_cast<std::size_t>(i)] = g.phi(i);
-            return owned(std::move(v), {g.n_phi()});
+            return tabulated(g.n_phi(), {g.n_phi()}, [&g](int i) { return g.phi(i); });
           },
           "Angle of every column, float64 (n_phi,) (a new array).")
       .def(
           "heights",
           [](const RangeGrid& g) {
-            std::vector<double> v(static_cast<std::size_t>(g.n_h()));
-            for (int j = 0; j < g.n_h(); ++j) v[static_cast<std::size_t>(j)] = g.h(j);
-            return owned(std::move(v), {g.n_h()});
+            return tabulated(g.n_h(), {g.n_h()}, [&g](int j) { return g.h(j); });
           },
           "Height of every row, float64 (n_h,) (a new array).")
       .def_property_readonly(
-          "radius",
-          [](py::object self) {
-            const auto& g = self.cast<const RangeGrid&>();
-            return view(self, g.radii().data(), {rows(g), cols(g)});
-          },
+          "radius", plane_property(&RangeGrid::radii),
           "Radius plane, float32 (n_h, n_phi), zero-copy read-only view (0 in invalid cells).")
+      .def_property_readonly("valid", plane_property(&RangeGrid::validity),
+                             "Validity plane, bool (n_h, n_phi), zero-copy read-only view.")
       .def_property_readonly(
-          "valid",
-          [](py::object self) {
-            const auto& g = self.cast<const RangeGrid&>();
-            return view(self, g.validity().data(), {rows(g), cols(g)}, false, py::dtype("bool"));
-          },
-          "Validity plane, bool (n_h, n_phi), zero-copy read-only view.")
-      .def_property_readonly(
-          "confidence",
-          [](py::object self) {
-            const auto& g = self.cast<const RangeGrid&>();
-            return view(self, g.confidences().data(), {rows(g), cols(g)});
-          },
+          "confidence", plane_property(&RangeGrid::confidences),
           "Confidence plane, float32 (n_h, n_phi) in [0, 1], zero-copy read-only view.")
       .def_property_readonly(
           "color",
@@ -328,51 +344,23 @@ mean() and gauss() return new arrays.)doc")
       .def_readonly("radius_mm", &SurfaceFields::radius_mm,
                     "Neighbourhood radius of the quadric methods, 0 otherwise.")
       .def("defined_count", &SurfaceFields::defined_count)
-      .def_property_readonly(
-          "defined",
-          [](py::object self) {
-            const auto& f = self.cast<const SurfaceFields&>();
-            return view(self, f.defined.data(), {f.n_h, f.n_phi}, false, py::dtype("bool"));
-          })
-      .def_property_readonly("normal",
-                             [](py::object self) {
-                               const auto& f = self.cast<const SurfaceFields&>();
-                               return fields_plane3(self, f.normal, f);
-                             })
-      .def_property_readonly("k1",
-                             [](py::object self) {
-                               const auto& f = self.cast<const SurfaceFields&>();
-                               return view(self, f.k1.data(), {f.n_h, f.n_phi});
-                             })
-      .def_property_readonly("k2",
-                             [](py::object self) {
-                               const auto& f = self.cast<const SurfaceFields&>();
-                               return view(self, f.k2.data(), {f.n_h, f.n_phi});
-                             })
-      .def_property_readonly("dir1",
-                             [](py::object self) {
-                               const auto& f = self.cast<const SurfaceFields&>();
-                               return fields_plane3(self, f.dir1, f);
-                             })
-      .def_property_readonly("dir2",
-                             [](py::object self) {
-                               const auto& f = self.cast<const SurfaceFields&>();
-                               return fields_plane3(self, f.dir2, f);
-                             })
+      .def_property_readonly("defined", fields_property(&SurfaceFields::defined))
+      .def_property_readonly("normal", fields_property(&SurfaceFields::normal))
+      .def_property_readonly("k1", fields_property(&SurfaceFields::k1))
+      .def_property_readonly("k2", fields_property(&SurfaceFields::k2))
+      .def_property_readonly("dir1", fields_property(&SurfaceFields::dir1))
+      .def_property_readonly("dir2", fields_property(&SurfaceFields::dir2))
       .def(
           "mean",
           [](const SurfaceFields& f) {
-            std::vector<float> v(f.size());
-            for (std::size_t k = 0; k < f.size(); ++k) v[k] = f.mean(k);
-            return owned(std::move(v), {f.n_h, f.n_phi});
+            return tabulated(f.size(), {f.n_h, f.n_phi}, [&f](std::size_t k) { return f.mean(k); });
           },
           "Mean curvature H = (k1 + k2) / 2, float32 (n_h, n_phi) (a new array).")
       .def(
           "gauss",
           [](const SurfaceFields& f) {
-            std::vector<float> v(f.size());
-            for (std::size_t k = 0; k < f.size(); ++k) v[k] = f.gauss(k);
-            return owned(std::move(v), {f.n_h, f.n_phi});
+            return tabulated(f.size(), {f.n_h, f.n_phi},
+                             [&f](std::size_t k) { return f.gauss(k); });
           },
           "Gaussian curvature K = k1 k2, float32 (n_h, n_phi) (a new array).")
       .def("__repr__", [](const SurfaceFields& f) {
@@ -387,10 +375,8 @@ mean() and gauss() return new arrays.)doc")
       [](const RangeGrid& grid, double spike_threshold_mm, double spike_spread_factor,
          int spike_min_neighbours, int min_component_cells, int fill_holes) {
         CleaningOptions o;
-        o.spike_threshold_mm = spike_threshold_mm;
-        o.spike_spread_factor = spike_spread_factor;
-        o.spike_min_neighbours = spike_min_neighbours;
-        o.min_component_cells = min_component_cells;
+        SCANMESH_SET_FIELDS(o, spike_threshold_mm, spike_spread_factor, spike_min_neighbours,
+                            min_component_cells);
         if (fill_holes < 0)
           throw InvalidInputError("clean: fill_holes must be >= 0 (0: off), got " +
                                   std::to_string(fill_holes));

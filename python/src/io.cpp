@@ -36,32 +36,17 @@ std::string lower_extension(const path& p) {
 }  // namespace
 
 void init_io(py::module_& m) {
-  m.def(
-      "read_grid",
-      [](const path& p) {
-        py::gil_scoped_release release;
-        return read_grid(p);
-      },
-      py::arg("path"),
-      "Reads a native range grid file (.smg). FileFormatError (ValueError) naming the file "
-      "for a malformed, truncated or corrupt file; IoError (OSError) if it cannot be read.");
-  m.def(
-      "write_grid",
-      [](const path& p, const RangeGrid& grid) {
-        py::gil_scoped_release release;
-        write_grid(p, grid);
-      },
-      py::arg("path"), py::arg("grid"), "Writes a native range grid file (.smg), atomically.");
+  // The library's readers and writers, bound as they are: each runs with the GIL released.
+  const auto without_gil = py::call_guard<py::gil_scoped_release>();
+  m.def("read_grid", &read_grid, py::arg("path"), without_gil,
+        "Reads a native range grid file (.smg). FileFormatError (ValueError) naming the file "
+        "for a malformed, truncated or corrupt file; IoError (OSError) if it cannot be read.");
+  m.def("write_grid", &write_grid, py::arg("path"), py::arg("grid"), without_gil,
+        "Writes a native range grid file (.smg), atomically.");
 
-  m.def(
-      "read_mesh",
-      [](const path& p) {
-        py::gil_scoped_release release;
-        return read_mesh(p);
-      },
-      py::arg("path"),
-      "Reads a mesh by extension: .ply, .off, .obj, .stl (read_mesh). FileFormatError naming "
-      "the file for malformed content, ValueError for another extension.");
+  m.def("read_mesh", &read_mesh, py::arg("path"), without_gil,
+        "Reads a mesh by extension: .ply, .off, .obj, .stl (read_mesh). FileFormatError naming "
+        "the file for malformed content, ValueError for another extension.");
   m.def(
       "read_obj",
       [](const path& p) {
@@ -83,21 +68,11 @@ void init_io(py::module_& m) {
       py::arg("path"), py::arg("mesh"), py::kw_only(), py::arg("ascii") = false,
       "Writes PLY (binary little-endian, or ASCII): positions, and normals, colours and face "
       "labels when present.");
-  m.def(
-      "write_obj",
-      [](const path& p, const Mesh& mesh, const std::string& texture_png) {
-        py::gil_scoped_release release;
-        write_obj(p, mesh, texture_png);
-      },
-      py::arg("path"), py::arg("mesh"), py::kw_only(), py::arg("texture_png") = "",
-      "Writes OBJ (v / vn / vt / f); with texture_png, also <stem>.mtl naming that image.");
-  m.def(
-      "write_stl",
-      [](const path& p, const Mesh& mesh) {
-        py::gil_scoped_release release;
-        write_stl(p, mesh);
-      },
-      py::arg("path"), py::arg("mesh"), "Writes binary STL.");
+  m.def("write_obj", &write_obj, py::arg("path"), py::arg("mesh"), py::kw_only(),
+        py::arg("texture_png") = "", without_gil,
+        "Writes OBJ (v / vn / vt / f); with texture_png, also <stem>.mtl naming that image.");
+  m.def("write_stl", &write_stl, py::arg("path"), py::arg("mesh"), without_gil,
+        "Writes binary STL.");
   m.def(
       "write_mesh",
       [](const path& p, const Mesh& mesh) {
@@ -115,43 +90,24 @@ void init_io(py::module_& m) {
       },
       py::arg("path"), py::arg("mesh"), "Writes a mesh by extension: .ply (binary), .obj, .stl.");
 
-  m.def(
-      "read_point_cloud",
-      [](const path& p) {
-        py::gil_scoped_release release;
-        return read_point_cloud(p);
-      },
-      py::arg("path"),
-      "Reads a point cloud by extension, as `scanmesh fans` does: .ply (vertices), .pcd "
-      "(ascii / binary / binary_compressed, organised or not), .xyz / .txt / .pts, .smg (the "
-      "grid's cells). FileFormatError naming the file for malformed content.");
+  m.def("read_point_cloud", &read_point_cloud, py::arg("path"), without_gil,
+        "Reads a point cloud by extension, as `scanmesh fans` does: .ply (vertices), .pcd "
+        "(ascii / binary / binary_compressed, organised or not), .xyz / .txt / .pts, .smg (the "
+        "grid's cells). FileFormatError naming the file for malformed content.");
 
-  m.def(
-      "read_fields",
-      [](const path& p) {
-        py::gil_scoped_release release;
-        return read_fields(p);
-      },
-      py::arg("path"), "Reads a surface fields file (.smf) written by curvature / write_fields.");
-  m.def(
-      "write_fields",
-      [](const path& p, const SurfaceFields& f) {
-        py::gil_scoped_release release;
-        write_fields(p, f);
-      },
-      py::arg("path"), py::arg("fields"), "Writes a surface fields file (.smf), atomically.");
+  m.def("read_fields", &read_fields, py::arg("path"), without_gil,
+        "Reads a surface fields file (.smf) written by curvature / write_fields.");
+  m.def("write_fields", &write_fields, py::arg("path"), py::arg("fields"), without_gil,
+        "Writes a surface fields file (.smf), atomically.");
 
-  m.def("export_pcd", &export_pcd, py::arg("path"), py::arg("grid"),
-        py::call_guard<py::gil_scoped_release>(),
+  m.def("export_pcd", &export_pcd, py::arg("path"), py::arg("grid"), without_gil,
         "The grid as an organised binary PCD (PointXYZRGB, invalid cells NaN).");
-  m.def("export_ply_points", &export_ply_points, py::arg("path"), py::arg("grid"),
-        py::call_guard<py::gil_scoped_release>(),
+  m.def("export_ply_points", &export_ply_points, py::arg("path"), py::arg("grid"), without_gil,
         "The valid cells as a binary PLY point cloud (x y z, colour, confidence, indices).");
-  m.def("export_texture_png", &export_texture_png, py::arg("path"), py::arg("grid"),
-        py::call_guard<py::gil_scoped_release>(),
+  m.def("export_texture_png", &export_texture_png, py::arg("path"), py::arg("grid"), without_gil,
         "The colour plane as a PNG (pixel x, y = cell i, j).");
-  m.def("export_depth_png", &export_depth_png, py::arg("path"), py::arg("grid"),
-        py::call_guard<py::gil_scoped_release>(), "A picture of the radius as a PNG.");
+  m.def("export_depth_png", &export_depth_png, py::arg("path"), py::arg("grid"), without_gil,
+        "A picture of the radius as a PNG.");
   m.def(
       "texture_image", [](const RangeGrid& g) { return image_array(texture_image(g)); },
       py::arg("grid"),

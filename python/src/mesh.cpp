@@ -13,17 +13,22 @@ namespace {
 
 py::ssize_t ssize(std::size_t n) { return static_cast<py::ssize_t>(n); }
 
-template <typename Vec>
-py::array rows_view(py::handle base, const std::vector<Vec>& v, py::ssize_t cols) {
-  return view(base, v.empty() ? nullptr : v.data()->data(), {ssize(v.size()), cols});
+// The first of a row's scalars, for every row type of Mesh and PointCloud (Eigen vectors and
+// std::array have data(); Rgb8 does not). The rows are packed: common.h checks it.
+template <typename Row>
+auto first_scalar(const Row& row) -> decltype(row.data()) {
+  return row.data();
 }
+const std::uint8_t* first_scalar(const Rgb8& color) { return &color.r; }
 
-py::array triangles_view(py::handle base, const std::vector<std::array<int, 3>>& t) {
-  return view(base, t.empty() ? nullptr : t.data()->data(), {ssize(t.size()), 3});
-}
-
-py::array colors_view(py::handle base, const std::vector<Rgb8>& c) {
-  return view(base, c.empty() ? nullptr : &c.data()->r, {ssize(c.size()), 3});
+// The getter of a read-only N x cols view of `rows`, kept alive by the Mesh or PointCloud: one
+// helper for every per-vertex and per-face array, whatever its row type.
+template <typename Owner, typename Row>
+auto rows_property(std::vector<Row> Owner::*rows, py::ssize_t cols) {
+  return [rows, cols](py::object self) {
+    const std::vector<Row>& v = self.cast<const Owner&>().*rows;
+    return view(self, v.empty() ? nullptr : first_scalar(v.front()), {ssize(v.size()), cols});
+  };
 }
 
 Mesh make_mesh(py::handle positions, py::handle triangles, py::handle normals, py::handle colors,
@@ -42,45 +47,27 @@ Mesh make_mesh(py::handle positions, py::handle triangles, py::handle normals, p
 }
 
 PointCloud make_cloud(py::handle positions, py::handle normals, py::handle colors) {
-  PointCloud c;
-  c.positions = to_vec3d(positions, "positions");
-  if (!normals.is_none()) c.normals = to_vec3f(normals, "normals");
-  if (!colors.is_none()) c.colors = to_rgb(colors, "colors");
+  PointCloud c = to_cloud(positions, "positions", normals, colors);
   if (c.has_normals() && c.normals.size() != c.positions.size())
     value_error("PointCloud: normals must have one row per position");
   if (c.has_colors() && c.colors.size() != c.positions.size())
     value_error("PointCloud: colors must have one row per position");
-  c.width = static_cast<int>(c.positions.size());
   return c;
 }
 
 py::dict check_report(const MeshCheckReport& r) {
   const TopologyStats& t = r.topology;
   py::dict d;
-  d["vertices"] = r.vertices;
-  d["faces"] = r.faces;
-  d["edges"] = t.edges;
-  d["boundary_edges"] = t.boundary_edges;
-  d["manifold_edges"] = t.manifold_edges;
-  d["nonmanifold_edges"] = t.nonmanifold_edges;
+  SCANMESH_PUT_FIELDS(d, r, vertices, faces);
+  SCANMESH_PUT_FIELDS(d, t, edges, boundary_edges, manifold_edges, nonmanifold_edges);
   d["inconsistently_oriented_edges"] = t.inconsistent_edges;
-  d["boundary_loops"] = t.boundary_loops;
-  d["boundary_loop_lengths"] = t.boundary_loop_lengths;
-  d["unreferenced_vertices"] = t.unreferenced_vertices;
-  d["euler_characteristic"] = t.euler_characteristic;
-  d["components"] = t.components;
+  SCANMESH_PUT_FIELDS(d, t, boundary_loops, boundary_loop_lengths, unreferenced_vertices,
+                      euler_characteristic, components);
   d["genus"] = t.genus();
-  d["duplicate_faces"] = r.duplicate_faces;
-  d["degenerate_faces"] = r.degenerate_faces;
-  d["nonmanifold_vertices"] = r.nonmanifold_vertices;
-  d["self_intersections"] = r.self_intersections;
-  d["self_intersections_checked"] = r.self_intersections_checked;
-  d["self_intersections_not_checked_reason"] = r.self_intersections_not_checked_reason;
-  d["min_angle_deg"] = r.min_angle_deg;
-  d["mean_min_angle_deg"] = r.mean_min_angle_deg;
-  d["min_radius_ratio"] = r.min_radius_ratio;
-  d["mean_radius_ratio"] = r.mean_radius_ratio;
-  d["fraction_min_angle_ge_30"] = r.fraction_min_angle_ge_30;
+  SCANMESH_PUT_FIELDS(d, r, duplicate_faces, degenerate_faces, nonmanifold_vertices,
+                      self_intersections, self_intersections_checked,
+                      self_intersections_not_checked_reason, min_angle_deg, mean_min_angle_deg,
+                      min_radius_ratio, mean_radius_ratio, fraction_min_angle_ge_30);
   d["min_angle_histogram_5deg"] =
       std::vector<std::size_t>(r.min_angle_histogram.begin(), r.min_angle_histogram.end());
   d["edge_manifold"] = r.edge_manifold();
@@ -116,30 +103,17 @@ Mesh(...) or mesh.replace(name=array, ...), which copy their input.
            py::arg("face_texcoords") = py::none(),
            "A mesh from NumPy arrays (copied). ValueError for wrong shapes, an index out of "
            "range, an attribute of the wrong length or a non-finite coordinate.")
-      .def_property_readonly(
-          "positions",
-          [](py::object self) { return rows_view(self, self.cast<const Mesh&>().positions, 3); })
-      .def_property_readonly(
-          "triangles",
-          [](py::object self) { return triangles_view(self, self.cast<const Mesh&>().triangles); })
-      .def_property_readonly(
-          "normals",
-          [](py::object self) { return rows_view(self, self.cast<const Mesh&>().normals, 3); })
-      .def_property_readonly(
-          "colors",
-          [](py::object self) { return colors_view(self, self.cast<const Mesh&>().colors); })
+      .def_property_readonly("positions", rows_property(&Mesh::positions, 3))
+      .def_property_readonly("triangles", rows_property(&Mesh::triangles, 3))
+      .def_property_readonly("normals", rows_property(&Mesh::normals, 3))
+      .def_property_readonly("colors", rows_property(&Mesh::colors, 3))
       .def_property_readonly("face_labels",
                              [](py::object self) {
                                const auto& v = self.cast<const Mesh&>().face_labels;
                                return view(self, v.data(), {ssize(v.size())});
                              })
-      .def_property_readonly(
-          "texcoords",
-          [](py::object self) { return rows_view(self, self.cast<const Mesh&>().texcoords, 2); })
-      .def_property_readonly("face_texcoords",
-                             [](py::object self) {
-                               return triangles_view(self, self.cast<const Mesh&>().face_texcoords);
-                             })
+      .def_property_readonly("texcoords", rows_property(&Mesh::texcoords, 2))
+      .def_property_readonly("face_texcoords", rows_property(&Mesh::face_texcoords, 3))
       .def_property_readonly("vertex_count", &Mesh::vertex_count)
       .def_property_readonly("face_count", &Mesh::face_count)
       .def_property_readonly("has_normals", &Mesh::has_normals)
@@ -173,17 +147,9 @@ A point cloud as read_point_cloud returns it (core/point_cloud_io.h), or built f
       .def(py::init(&make_cloud), py::arg("positions"), py::kw_only(),
            py::arg("normals") = py::none(), py::arg("colors") = py::none(),
            "An unorganised cloud from arrays (copied).")
-      .def_property_readonly("positions",
-                             [](py::object self) {
-                               return rows_view(self, self.cast<const PointCloud&>().positions, 3);
-                             })
-      .def_property_readonly("normals",
-                             [](py::object self) {
-                               return rows_view(self, self.cast<const PointCloud&>().normals, 3);
-                             })
-      .def_property_readonly(
-          "colors",
-          [](py::object self) { return colors_view(self, self.cast<const PointCloud&>().colors); })
+      .def_property_readonly("positions", rows_property(&PointCloud::positions, 3))
+      .def_property_readonly("normals", rows_property(&PointCloud::normals, 3))
+      .def_property_readonly("colors", rows_property(&PointCloud::colors, 3))
       .def_readonly("width", &PointCloud::width)
       .def_readonly("height", &PointCloud::height)
       .def_property_readonly("organised", &PointCloud::organised)

@@ -25,72 +25,30 @@ namespace {
 
 py::dict fan_stats(const FanStats& s) {
   py::dict d;
-  d["points"] = s.points;
-  d["duplicate_points"] = s.duplicate_points;
-  d["cell_edge"] = s.cell_edge;
-  d["pca_fallbacks"] = s.pca_fallbacks;
-  d["open_fans"] = s.open_fans;
-  d["proposed_triangles"] = s.proposed_triangles;
-  d["rejected_triangles"] = s.rejected_triangles;
-  d["seeds"] = s.seeds;
-  d["glued_triangles"] = s.glued_triangles;
-  d["unzipped_glues"] = s.unzipped_glues;
-  d["bowtie_faces_removed"] = s.bowtie_faces_removed;
-  d["hole_triangles"] = s.hole_triangles;
-  d["inserted_points"] = s.inserted_points;
-  d["delaunay_flips"] = s.delaunay_flips;
-  d["unused_points"] = s.unused_points;
-  d["seconds_normals"] = s.seconds_normals;
-  d["seconds_fans"] = s.seconds_fans;
-  d["seconds_assembly"] = s.seconds_assembly;
+  SCANMESH_PUT_FIELDS(d, s, points, duplicate_points, cell_edge, pca_fallbacks, open_fans,
+                      proposed_triangles, rejected_triangles, seeds, glued_triangles,
+                      unzipped_glues, bowtie_faces_removed, hole_triangles, inserted_points,
+                      delaunay_flips, unused_points, seconds_normals, seconds_fans,
+                      seconds_assembly);
   return d;
 }
 
 py::dict remesh_stats(const remeshing::RemeshStats& s) {
   py::dict d;
-  d["input_vertices"] = s.input_vertices;
-  d["input_faces"] = s.input_faces;
-  d["output_vertices"] = s.output_vertices;
-  d["output_faces"] = s.output_faces;
-  d["skeleton_segments"] = s.skeleton_segments;
-  d["branch_vertices"] = s.branch_vertices;
-  d["patches"] = s.patches;
-  d["collapses"] = s.collapses;
-  d["splits"] = s.splits;
-  d["flips"] = s.flips;
-  d["moves"] = s.moves;
-  d["rejected_error"] = s.rejected_error;
-  d["rejected_topology"] = s.rejected_topology;
-  d["skeleton_splits"] = s.skeleton_splits;
-  d["skeleton_collapses"] = s.skeleton_collapses;
-  d["intersecting_faces_before_repair"] = s.intersecting_faces_before_repair;
-  d["polish_bad_before"] = s.polish_bad_before;
-  d["polish_bad_after"] = s.polish_bad_after;
-  d["polish_moves"] = s.polish_moves;
-  d["polish_flips"] = s.polish_flips;
-  d["repair_splits"] = s.repair_splits;
-  d["seconds_setup"] = s.seconds_setup;
-  d["seconds_adapt"] = s.seconds_adapt;
-  d["seconds_count"] = s.seconds_count;
-  d["seconds_regularize"] = s.seconds_regularize;
-  d["seconds_smooth"] = s.seconds_smooth;
-  d["seconds_total"] = s.seconds_total;
+  SCANMESH_PUT_FIELDS(d, s, input_vertices, input_faces, output_vertices, output_faces,
+                      skeleton_segments, branch_vertices, patches, collapses, splits, flips, moves,
+                      rejected_error, rejected_topology, skeleton_splits, skeleton_collapses,
+                      intersecting_faces_before_repair, polish_bad_before, polish_bad_after,
+                      polish_moves, polish_flips, repair_splits, seconds_setup, seconds_adapt,
+                      seconds_count, seconds_regularize, seconds_smooth, seconds_total);
   return d;
 }
 
 py::dict prepare_stats(const remeshing::PrepareStats& s) {
   py::dict d;
-  d["components_removed"] = s.components_removed;
-  d["faces_removed"] = s.faces_removed;
-  d["holes_filled"] = s.holes_filled;
-  d["faces_added"] = s.faces_added;
-  d["degenerate_removed"] = s.degenerate_removed;
-  d["needles_welded"] = s.needles_welded;
-  d["caps_flipped"] = s.caps_flipped;
-  d["caps_removed"] = s.caps_removed;
-  d["spike_faces_removed"] = s.spike_faces_removed;
-  d["pinch_faces_removed"] = s.pinch_faces_removed;
-  d["tip_faces_removed"] = s.tip_faces_removed;
+  SCANMESH_PUT_FIELDS(d, s, components_removed, faces_removed, holes_filled, faces_added,
+                      degenerate_removed, needles_welded, caps_flipped, caps_removed,
+                      spike_faces_removed, pinch_faces_removed, tip_faces_removed);
   return d;
 }
 
@@ -171,9 +129,7 @@ py::dict border_dict(const AftInput& l) {
   py::dict d;
   d["mode"] = aft::to_string(l.border_mode);
   d["on"] = l.border.border_on;
-  d["border_lines"] = l.border.border_lines;
-  d["clipped_lines"] = l.border.clipped_lines;
-  d["dropped_lines"] = l.border.dropped_lines;
+  SCANMESH_PUT_FIELDS(d, l.border, border_lines, clipped_lines, dropped_lines);
   return d;
 }
 
@@ -183,11 +139,7 @@ py::list regions_list(const aft::RegionGraph& g) {
     const aft::Region& region = g.regions[r];
     py::dict d;
     d["index"] = r;
-    d["name"] = region.name;
-    d["opening"] = region.opening;
-    d["area"] = region.area;
-    d["unit_mm"] = region.unit_mm;
-    d["mesher"] = region.mesher;
+    SCANMESH_PUT_FIELDS(d, region, name, opening, area, unit_mm, mesher);
     d["label_point"] = py::make_tuple(region.label_point.x(), region.label_point.y());
     regions.append(d);
   }
@@ -204,10 +156,7 @@ py::dict animesh_report(const AftInput& l, const aft::AnimationMesh& am,
   d["triangles"] = am.mesh.triangles.size();
   d["steiner_points"] = steiner;
   d["unmeshed_front_edges"] = unmeshed;
-  d["flips"] = am.flips;
-  d["valence_flip_retries"] = am.valence_flip_retries;
-  d["regions_remeshed"] = am.regions_remeshed;
-  d["serial_postprocessing"] = am.serial_postprocessing;
+  SCANMESH_PUT_FIELDS(d, am, flips, valence_flip_retries, regions_remeshed, serial_postprocessing);
   py::dict repair;
   repair["optimise"] = am.repair_operations[0];
   repair["flip"] = am.repair_operations[1];
@@ -221,33 +170,21 @@ py::dict animesh_report(const AftInput& l, const aft::AnimationMesh& am,
   quality["min_angle_deg"] = q.min_angle_deg;
   quality["min_angle_away_from_sharp_junctions_deg"] = q.min_angle_non_exempt_deg;
   quality["exempt_triangles"] = q.small_angle_exempt;
-  quality["max_angle_deg"] = q.max_angle_deg;
-  quality["fraction_min_angle_ge_30"] = q.fraction_min_angle_ge_30;
-  quality["fraction_min_angle_ge_20"] = q.fraction_min_angle_ge_20;
-  quality["mean_radius_ratio"] = q.mean_radius_ratio;
-  quality["min_radius_ratio"] = q.min_radius_ratio;
+  SCANMESH_PUT_FIELDS(quality, q, max_angle_deg, fraction_min_angle_ge_30, fraction_min_angle_ge_20,
+                      mean_radius_ratio, min_radius_ratio);
   quality["min_angle_histogram_5deg"] =
       std::vector<int>(q.min_angle_histogram.begin(), q.min_angle_histogram.end());
   quality["radius_ratio_histogram_0.1"] =
       std::vector<int>(q.radius_ratio_histogram.begin(), q.radius_ratio_histogram.end());
-  quality["valence_histogram"] = q.valence_histogram;
-  quality["hausdorff_mesh_to_surface_mm"] = q.hausdorff_mesh_to_surface_mm;
-  quality["hausdorff_surface_to_mesh_mm"] = q.hausdorff_surface_to_mesh_mm;
-  quality["max_vertex_offset_mm"] = q.max_vertex_offset_mm;
-  quality["vertices_off_surface"] = q.vertices_off_surface;
+  SCANMESH_PUT_FIELDS(quality, q, valence_histogram, hausdorff_mesh_to_surface_mm,
+                      hausdorff_surface_to_mesh_mm, max_vertex_offset_mm, vertices_off_surface);
   quality["text"] = q.to_text();
   d["quality"] = quality;
   py::list regions = regions_list(l.graph);
   for (const auto& s : am.region_stats) {
     py::dict r = regions[static_cast<std::size_t>(s.region)].cast<py::dict>();
-    r["triangles"] = s.triangles;
-    r["steiner_points"] = s.steiner_points;
-    r["chose_new"] = s.chose_new;
-    r["chose_existing"] = s.chose_existing;
-    r["chose_circumcentre"] = s.chose_circumcentre;
-    r["rejected_circumcentres"] = s.rejected_circumcentres;
-    r["unmeshed_front_edges"] = s.unmeshed_front_edges;
-    r["mesher"] = s.mesher;
+    SCANMESH_PUT_FIELDS(r, s, triangles, steiner_points, chose_new, chose_existing,
+                        chose_circumcentre, rejected_circumcentres, unmeshed_front_edges, mesher);
   }
   d["regions"] = regions;
   d["data_border"] = border_dict(l);
@@ -285,10 +222,7 @@ void init_meshing(py::module_& m) {
       [](const RangeGrid& grid, double max_depth_jump_mm, bool close_seam, bool with_colors,
          bool with_texcoords) {
         GridMeshOptions o;
-        o.max_depth_jump_mm = max_depth_jump_mm;
-        o.close_seam = close_seam;
-        o.with_colors = with_colors;
-        o.with_texcoords = with_texcoords;
+        SCANMESH_SET_FIELDS(o, max_depth_jump_mm, close_seam, with_colors, with_texcoords);
         GridMesh r;
         {
           py::gil_scoped_release release;
@@ -319,17 +253,9 @@ non-positive depth limit.)doc");
          int max_hole_edges, bool pca_normals, bool orient_away_from_axis, std::uint64_t seed,
          int threads) {
         FanOptions o;
-        o.k = k;
-        o.alpha_deg = alpha_deg;
-        o.dmax_factor = dmax_factor;
-        o.max_edge = max_edge;
-        o.max_edge_factor = max_edge_factor;
-        o.max_normal_angle_deg = max_normal_angle_deg;
-        o.max_hole_edges = max_hole_edges;
-        o.pca_normals = pca_normals;
-        o.orient_away_from_axis = orient_away_from_axis;
-        o.seed = seed;
-        o.threads = threads;
+        SCANMESH_SET_FIELDS(o, k, alpha_deg, dmax_factor, max_edge, max_edge_factor,
+                            max_normal_angle_deg, max_hole_edges, pca_normals,
+                            orient_away_from_axis, seed, threads);
         o.validate();
         FanResult r;
         if (py::isinstance<PointCloud>(points)) {
@@ -343,11 +269,7 @@ non-positive depth limit.)doc");
           py::gil_scoped_release release;
           r = build_fans(p, o);
         } else {
-          PointCloud cloud;
-          cloud.positions = to_vec3d(points, "points");
-          cloud.width = static_cast<int>(cloud.positions.size());
-          if (!normals.is_none()) cloud.normals = to_vec3f(normals, "normals");
-          if (!colors.is_none()) cloud.colors = to_rgb(colors, "colors");
+          const PointCloud cloud = to_cloud(points, "points", normals, colors);
           if ((cloud.has_normals() && cloud.normals.size() != cloud.positions.size()) ||
               (cloud.has_colors() && cloud.colors.size() != cloud.positions.size()))
             value_error("build_fans: normals and colors need one row per point");
@@ -418,31 +340,13 @@ than 3 points or non-finite coordinates.)doc");
         RemeshOptions o;
         o.target_vertices = target_vertices;
         o.scheme = parse_remesh_scheme(scheme);
-        o.skeleton.sharp_angle_deg = sharp_angle_deg;
-        o.skeleton.kink_angle_deg = kink_angle_deg;
-        o.skeleton.kink_window = kink_window;
-        o.skeleton.kink_reach_mm = kink_reach_mm;
-        o.skeleton.label_borders = label_borders;
-        o.density.gamma = gamma;
-        o.density.n_filter = n_filter;
-        o.density.clip = clip;
-        o.density.curvature_radius = curvature_radius;
-        o.density.gradation = gradation;
-        o.theta_dist_deg = theta_dist_deg;
-        o.theta_glatt_deg = theta_glatt_deg;
-        o.adapt_iterations = adapt_iterations;
-        o.n_area = n_area;
-        o.n_step = n_step;
-        o.drive_limit = drive_limit;
-        o.regularize_queue = regularize_queue;
-        o.prevent_intersections = prevent_intersections;
-        o.smoothing_passes = smoothing_passes;
-        o.polish_rounds = polish_rounds;
-        o.polish_angle_deg = polish_angle_deg;
-        o.polish_flip_cost = polish_flip_cost;
-        o.polish_floor_deg = polish_floor_deg;
-        o.polish_floor_glatt_deg = polish_floor_glatt_deg;
-        o.polish_floor_dist_deg = polish_floor_dist_deg;
+        SCANMESH_SET_FIELDS(o.skeleton, sharp_angle_deg, kink_angle_deg, kink_window, kink_reach_mm,
+                            label_borders);
+        SCANMESH_SET_FIELDS(o.density, gamma, n_filter, clip, curvature_radius, gradation);
+        SCANMESH_SET_FIELDS(o, theta_dist_deg, theta_glatt_deg, adapt_iterations, n_area, n_step,
+                            drive_limit, regularize_queue, prevent_intersections, smoothing_passes,
+                            polish_rounds, polish_angle_deg, polish_flip_cost, polish_floor_deg,
+                            polish_floor_glatt_deg, polish_floor_dist_deg);
         if (features) o.features = read_feature_lines(*features);
         bool prepared = false;
         const PrepareOptions po =

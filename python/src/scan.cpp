@@ -106,23 +106,15 @@ py::dict import_report(const ImportResult& r) {
   py::list arcs;
   for (const auto& [a, b] : rep.coverage.arcs) arcs.append(py::make_tuple(a, b));
   py::dict coverage;
-  coverage["full_turn"] = rep.coverage.full_turn;
-  coverage["columns"] = rep.coverage.columns;
-  coverage["covered_columns"] = rep.coverage.covered_columns;
+  SCANMESH_PUT_FIELDS(coverage, rep.coverage, full_turn, columns, covered_columns);
   coverage["covered_fraction"] = rep.coverage.covered_fraction();
   coverage["arcs_rad"] = arcs;
   py::dict d;
-  d["input_kind"] = rep.input_kind;
-  d["method"] = rep.method;
-  d["input_points"] = rep.input_points;
-  d["input_triangles"] = rep.input_triangles;
-  d["samples_used"] = rep.samples_used;
-  d["colors"] = rep.colors;
-  d["textured"] = rep.textured;
+  SCANMESH_PUT_FIELDS(d, rep, input_kind, method, input_points, input_triangles, samples_used,
+                      colors, textured);
   d["axis_point"] = vec3(rep.axis.point);
   d["axis_direction"] = vec3(rep.axis.direction);
-  d["sample_spacing_mm"] = rep.sample_spacing_mm;
-  d["cell_mm"] = rep.cell_mm;
+  SCANMESH_PUT_FIELDS(d, rep, sample_spacing_mm, cell_mm);
   d["turn_coverage"] = coverage;
   d["warnings"] = rep.warnings;
   std::vector<double> rot(9);
@@ -267,11 +259,7 @@ and spike (bool: the measurement was replaced by an outlier).)doc")
           o.axis_direction = to_point(axis, "axis");
         }
         if (!axis_point.is_none()) o.axis_point = to_point(axis_point, "axis_point");
-        o.n_phi = n_phi;
-        o.n_h = n_h;
-        o.dh = dh;
-        o.layer_gap_cells = layer_gap_cells;
-        o.max_lattice_jump = max_lattice_jump;
+        SCANMESH_SET_FIELDS(o, n_phi, n_h, dh, layer_gap_cells, max_lattice_jump);
         require_range("import_scan", "layer_gap_cells", layer_gap_cells, 0, 1e6);
         require_range("import_scan", "max_lattice_jump", max_lattice_jump, 0, 1e6);
         ImportResult r;
@@ -289,9 +277,7 @@ and spike (bool: the measurement was replaced by an outlier).)doc")
           py::gil_scoped_release release;
           r = import_scan(path, o);
         } else {
-          PointCloud cloud;
-          cloud.positions = to_vec3d(input, "points");
-          cloud.width = static_cast<int>(cloud.positions.size());
+          const PointCloud cloud = to_cloud(input, "points");
           py::gil_scoped_release release;
           r = grid_from_cloud(cloud, o, "<points>");
         }
