@@ -9,6 +9,7 @@
 
 #include "scanmesh/acquisition/calibration.h"
 #include "scanmesh/core/atomic_file.h"
+#include "scanmesh/core/config_file.h"
 #include "scanmesh/core/errors.h"
 
 namespace scanmesh {
@@ -17,23 +18,11 @@ namespace {
 using Eigen::Vector2d;
 using Eigen::Vector3d;
 
-std::string fmt(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
-std::string fmt3(const Vector3d& v) {
-  return "[" + fmt(v.x()) + ", " + fmt(v.y()) + ", " + fmt(v.z()) + "]";
-}
-
 class Reader {
  public:
   explicit Reader(std::string source) : source_(std::move(source)) {}
   [[noreturn]] void fail(const YAML::Node& n, const std::string& problem) const {
-    const YAML::Mark m = n.Mark();
-    if (m.line >= 0)
-      throw FileFormatError(source_, "line " + std::to_string(m.line + 1) + ": " + problem);
-    throw FileFormatError(source_, problem);
+    throw_format_error_at_line(source_, n.Mark().line, problem);
   }
   YAML::Node need(const YAML::Node& map, const char* key, const std::string& where) const {
     if (!map.IsMap()) fail(map, where + " must be a mapping");
@@ -148,31 +137,26 @@ std::string Calibration::to_yaml() const {
   o << "format: scanmesh-calibration\nversion: 1\n";
   const CameraModel& c = camera;
   o << "image: {width: " << c.width << ", height: " << c.height << "}\n";
-  o << "intrinsics: {fx: " << fmt(c.fx) << ", fy: " << fmt(c.fy) << ", cx: " << fmt(c.cx)
-    << ", cy: " << fmt(c.cy) << "}\n";
-  o << "distortion: {k1: " << fmt(c.k1) << ", k2: " << fmt(c.k2) << ", p1: " << fmt(c.p1)
-    << ", p2: " << fmt(c.p2) << ", k3: " << fmt(c.k3) << "}\n";
-  o << "axis: {direction: " << fmt3(axis_direction) << ", origin_mm: " << fmt3(axis_origin_mm)
-    << "}\n";
+  o << camera_intrinsics_yaml(c);
+  o << "axis: {direction: " << format_exact_vector3(axis_direction)
+    << ", origin_mm: " << format_exact_vector3(axis_origin_mm) << "}\n";
   o << "lasers:\n";
   for (const auto& l : lasers)
-    o << "  - {name: " << (l.name.empty() ? "laser" : l.name) << ", normal: " << fmt3(l.normal)
-      << ", distance_mm: " << fmt(l.distance_mm) << "}\n";
-  o << "quality: {reprojection_rms_px: " << fmt(reprojection_rms_px)
-    << ", laser_rms_mm: " << fmt(laser_rms_mm) << ", views: " << views << ", corners: " << corners
-    << ", laser_points: " << laser_points << "}\n";
+    o << "  - {name: " << (l.name.empty() ? "laser" : l.name)
+      << ", normal: " << format_exact_vector3(l.normal)
+      << ", distance_mm: " << format_exact_number(l.distance_mm) << "}\n";
+  o << "quality: {reprojection_rms_px: " << format_exact_number(reprojection_rms_px)
+    << ", laser_rms_mm: " << format_exact_number(laser_rms_mm) << ", views: " << views
+    << ", corners: " << corners << ", laser_points: " << laser_points << "}\n";
   const CalibrationUncertainty& u = uncertainty;
-  o << "uncertainty:\n  intrinsics: {fx: " << fmt(u.fx) << ", fy: " << fmt(u.fy)
-    << ", cx: " << fmt(u.cx) << ", cy: " << fmt(u.cy) << "}\n";
-  o << "  distortion: {k1: " << fmt(u.k1) << ", k2: " << fmt(u.k2) << ", p1: " << fmt(u.p1)
-    << ", p2: " << fmt(u.p2) << ", k3: " << fmt(u.k3) << "}\n";
-  o << "  axis_direction_deg: " << fmt(u.axis_direction_deg)
-    << "\n  axis_point_mm: " << fmt(u.axis_point_mm) << "\n  laser_normal_deg: [";
+  o << "uncertainty:\n" << camera_intrinsics_yaml(u, "  ");
+  o << "  axis_direction_deg: " << format_exact_number(u.axis_direction_deg)
+    << "\n  axis_point_mm: " << format_exact_number(u.axis_point_mm) << "\n  laser_normal_deg: [";
   for (std::size_t i = 0; i < u.laser_normal_deg.size(); ++i)
-    o << (i ? ", " : "") << fmt(u.laser_normal_deg[i]);
+    o << (i ? ", " : "") << format_exact_number(u.laser_normal_deg[i]);
   o << "]\n  laser_distance_mm: [";
   for (std::size_t i = 0; i < u.laser_distance_mm.size(); ++i)
-    o << (i ? ", " : "") << fmt(u.laser_distance_mm[i]);
+    o << (i ? ", " : "") << format_exact_number(u.laser_distance_mm[i]);
   o << "]\n";
   return o.str();
 }
@@ -260,18 +244,12 @@ Calibration Calibration::from_yaml_text(const std::string& text, const std::stri
   } catch (const YAML::Exception& e) {
     throw FileFormatError(source, std::string("unexpected YAML structure: ") + e.what());
   }
-  try {
-    c.validate();
-  } catch (const InvalidInputError& e) {
-    throw FileFormatError(source, e.what());
-  }
+  validate_parsed_config(c, source);
   return c;
 }
 
 Calibration Calibration::read_yaml(const std::filesystem::path& path) {
-  // Whole-file read through core (names the file and the OS reason, refuses a directory).
-  const std::vector<std::uint8_t> bytes = read_file_bytes(path, kMaxConfigFileBytes);
-  return from_yaml_text(std::string(bytes.begin(), bytes.end()), path.string());
+  return from_yaml_text(read_config_text(path), path.string());
 }
 
 void Calibration::write_yaml(const std::filesystem::path& path) const {

@@ -6,7 +6,9 @@
 #include <fstream>
 #include <sstream>
 
+#include "scanmesh/core/config_file.h"
 #include "scanmesh/core/errors.h"
+#include "skeleton_yaml.h"
 #include "yaml_util.h"
 
 namespace scanmesh::sim {
@@ -43,17 +45,7 @@ AnimatedSkeleton AnimatedSkeleton::from_yaml_text(const std::string& text,
     el.name = rd.as<std::string>(rd.required(e, "name", who), who + " name");
     for (const auto& other : s.elements)
       if (other.name == el.name) rd.fail(e, who + ": duplicate name '" + el.name + "'");
-    const auto type = rd.as<std::string>(rd.required(e, "type", who), who + " type");
-    if (type == "point") {
-      el.type = SkeletonElement::Type::Point;
-      el.a = rd.vec3(rd.required(e, "center", who), who + " center");
-    } else if (type == "segment") {
-      el.type = SkeletonElement::Type::Segment;
-      el.a = rd.vec3(rd.required(e, "a", who), who + " a");
-      el.b = rd.vec3(rd.required(e, "b", who), who + " b");
-    } else {
-      rd.fail(e["type"], who + ": unknown element type '" + type + "' (point, segment)");
-    }
+    detail::read_skeleton_element_geometry(rd, e, who, el);
     el.radius = rd.positive(rd.required(e, "radius", who), who + " radius");
     el.weight = e["weight"] ? rd.number(e["weight"], who + " weight") : 1.0;
     s.elements.push_back(el);
@@ -104,7 +96,7 @@ AnimatedSkeleton AnimatedSkeleton::from_yaml_text(const std::string& text,
 }
 
 AnimatedSkeleton AnimatedSkeleton::from_yaml_file(const std::filesystem::path& path) {
-  return from_yaml_text(detail::read_text_file(path), path.string());
+  return from_yaml_text(read_config_text(path), path.string());
 }
 
 std::vector<SkeletonElement> AnimatedSkeleton::elements_at(double t) const {

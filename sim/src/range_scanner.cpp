@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "random.h"
+#include "scanmesh/core/config_file.h"
 #include "scanmesh/core/errors.h"
 #include "yaml_util.h"
 
@@ -28,12 +29,6 @@ const Rgb8 kBackground{18, 18, 22};
 // Purposes of the counter-based random numbers (part of the hash key).
 enum Purpose : std::uint64_t { kNoise = 1, kHairDrop, kHairNoise, kSpike, kSpikeSize, kSpikeSign };
 
-std::string fmt(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
-
 void check(bool ok, const std::string& problem) {
   if (!ok) throw InvalidInputError("scanner config: " + problem);
 }
@@ -46,7 +41,8 @@ void ScannerConfig::validate() const {
   // The simulation holds ~160 bytes per cell while it renders: 4 M cells (2048 x 2048) stay
   // below 1 GB, the 64 M a grid file may hold would take over 10 GB.
   check(static_cast<long long>(n_phi) * n_h <= kMaxSimulatedCells,
-        "n_phi x n_h must be at most " + std::to_string(kMaxSimulatedCells) + " cells (e.g. 2048 x 2048)");
+        "n_phi x n_h must be at most " + std::to_string(kMaxSimulatedCells) +
+            " cells (e.g. 2048 x 2048)");
   check(std::isfinite(radius_mm) && radius_mm >= kMinGridLengthMm,
         "radius_mm must be at least 1e-9 mm");
   check(std::isfinite(h0_mm), "h0_mm must be finite");
@@ -128,16 +124,12 @@ ScannerConfig ScannerConfig::from_yaml_text(const std::string& text,
     else
       rd.fail(kv.first, "unknown scanner key '" + key + "'");
   }
-  try {
-    c.validate();
-  } catch (const InvalidInputError& e) {
-    throw FileFormatError(source_name, e.what());
-  }
+  validate_parsed_config(c, source_name);
   return c;
 }
 
 ScannerConfig ScannerConfig::from_yaml_file(const std::filesystem::path& path) {
-  return from_yaml_text(detail::read_text_file(path), path.string());
+  return from_yaml_text(read_config_text(path), path.string());
 }
 
 ScannerConfig builtin_head_scanner() {
@@ -276,20 +268,20 @@ SimulatedScan simulate_scan(const Scene& scene, const ScannerConfig& config,
   md["source"] = "sim";
   md["scene"] = scene.name;
   md["seed"] = std::to_string(config.seed);
-  md["scanner_radius_mm"] = fmt(config.radius_mm);
-  md["noise_sigma_mm"] = fmt(config.noise_sigma_mm);
+  md["scanner_radius_mm"] = format_exact_number(config.radius_mm);
+  md["noise_sigma_mm"] = format_exact_number(config.noise_sigma_mm);
   md["grazing_dropout"] = config.grazing_dropout ? "true" : "false";
-  md["grazing_limit_deg"] = fmt(config.grazing_limit_deg);
+  md["grazing_limit_deg"] = format_exact_number(config.grazing_limit_deg);
   md["occlusion"] = config.occlusion ? "true" : "false";
-  md["camera_baseline_deg"] = fmt(config.camera_baseline_deg);
-  md["camera_radius_mm"] = fmt(config.camera_radius_mm);
+  md["camera_baseline_deg"] = format_exact_number(config.camera_baseline_deg);
+  md["camera_radius_mm"] = format_exact_number(config.camera_radius_mm);
   md["hair"] = config.hair ? "true" : "false";
-  md["hair_noise_sigma_mm"] = fmt(config.hair_noise_sigma_mm);
-  md["hair_dropout_probability"] = fmt(config.hair_dropout_probability);
-  md["spike_probability"] = fmt(config.spike_probability);
+  md["hair_noise_sigma_mm"] = format_exact_number(config.hair_noise_sigma_mm);
+  md["hair_dropout_probability"] = format_exact_number(config.hair_dropout_probability);
+  md["spike_probability"] = format_exact_number(config.spike_probability);
   md["height_band"] = config.height_band ? "true" : "false";
-  md["band_min_mm"] = fmt(config.band_min_mm);
-  md["band_max_mm"] = fmt(config.band_max_mm);
+  md["band_min_mm"] = format_exact_number(config.band_min_mm);
+  md["band_max_mm"] = format_exact_number(config.band_max_mm);
   return out;
 }
 

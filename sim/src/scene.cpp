@@ -7,9 +7,11 @@
 #include <fstream>
 #include <sstream>
 
+#include "scanmesh/core/config_file.h"
 #include "scanmesh/core/errors.h"
 #include "scanmesh/sim/shapes.h"
 #include "scene_detail.h"
+#include "skeleton_yaml.h"
 #include "yaml_util.h"
 
 namespace scanmesh::sim {
@@ -71,18 +73,9 @@ std::shared_ptr<const SceneObject> parse_skeletal(const YamlReader& rd, const YA
     SkeletonElement s;
     s.name =
         e["name"] ? rd.as<std::string>(e["name"], who + " name") : "element" + std::to_string(k);
-    const auto type = rd.as<std::string>(rd.required(e, "type", who), who + " type");
-    if (type == "point") {
-      s.type = SkeletonElement::Type::Point;
-      s.a = rd.vec3(rd.required(e, "center", who), who + " center");
-    } else if (type == "segment") {
-      s.type = SkeletonElement::Type::Segment;
-      s.a = rd.vec3(rd.required(e, "a", who), who + " a");
-      s.b = rd.vec3(rd.required(e, "b", who), who + " b");
-      if ((s.a - s.b).norm() < 1e-9) rd.fail(e, who + ": segment end points coincide");
-    } else {
-      rd.fail(e["type"], who + ": unknown element type '" + type + "' (point, segment)");
-    }
+    detail::read_skeleton_element_geometry(rd, e, who, s);
+    if (s.type == SkeletonElement::Type::Segment && (s.a - s.b).norm() < 1e-9)
+      rd.fail(e, who + ": segment end points coincide");
     s.radius = rd.positive(rd.required(e, "radius", who), who + " radius");
     s.weight = e["weight"] ? rd.number(e["weight"], who + " weight") : 1.0;
     elements.push_back(s);
@@ -238,7 +231,7 @@ Scene Scene::from_yaml_text(const std::string& text, const std::string& source_n
 }
 
 Scene Scene::from_yaml_file(const std::filesystem::path& path) {
-  return from_yaml_text(detail::read_text_file(path), path.string());
+  return from_yaml_text(read_config_text(path), path.string());
 }
 
 std::optional<RayHit> Scene::intersect(const Vector3d& origin, const Vector3d& unit_dir,

@@ -35,6 +35,22 @@ Vector3d unit_axis(const Vector3d& axis) {
   return axis / n;
 }
 
+//! A point seen from an axis through `center` with unit direction `axis`: its height `z` along
+//! the axis, its offset `radial` perpendicular to it and that offset's length `rho`.
+struct AxialCoordinates {
+  double z;
+  Vector3d radial;
+  double rho;
+};
+
+AxialCoordinates axial_coordinates(const Vector3d& x, const Vector3d& center,
+                                   const Vector3d& axis) {
+  const Vector3d q = x - center;
+  const double z = q.dot(axis);
+  const Vector3d radial = q - z * axis;
+  return {z, radial, radial.norm()};
+}
+
 class Sphere final : public SceneObject {
  public:
   Sphere(const Vector3d& c, double r) : c_(c), r_(r) {}
@@ -64,10 +80,7 @@ class Cylinder final : public SceneObject {
   Cylinder(const Vector3d& c, const Vector3d& axis, double r, std::optional<double> hl)
       : c_(c), a_(axis), r_(r), hl_(hl) {}
   FieldSample field(const Vector3d& x) const override {
-    const Vector3d q = x - c_;
-    const double z = q.dot(a_);
-    const Vector3d radial = q - z * a_;
-    const double rho = radial.norm();
+    const auto [z, radial, rho] = axial_coordinates(x, c_, a_);
     FieldSample f;
     const double d_rad = rho - r_;
     const double d_cap = hl_ ? std::abs(z) - *hl_ : -kInf;
@@ -151,10 +164,7 @@ class Torus final : public SceneObject {
       : c_(c), a_(axis), big_r_(big_r), small_r_(small_r) {}
 
   FieldSample field(const Vector3d& x) const override {
-    const Vector3d q = x - c_;
-    const double z = q.dot(a_);
-    const Vector3d radial = q - z * a_;
-    const double rho = radial.norm();
+    const auto [z, radial, rho] = axial_coordinates(x, c_, a_);
     FieldSample f;
     // On the axis every direction is radial; pick one so the field stays defined.
     const Vector3d e = rho > 1e-300 ? Vector3d(radial / rho) : any_perpendicular();

@@ -12,7 +12,7 @@
 #include <sstream>
 
 #include "random.h"
-#include "scanmesh/core/atomic_file.h"
+#include "scanmesh/core/config_file.h"
 #include "scanmesh/core/errors.h"
 #include "yaml_util.h"
 
@@ -43,15 +43,6 @@ void check(bool ok, const std::string& problem) {
 }
 
 bool finite3(const Vector3d& v) { return v.allFinite(); }
-
-std::string fmt(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
-std::string fmt3(const Vector3d& v) {
-  return "[" + fmt(v.x()) + ", " + fmt(v.y()) + ", " + fmt(v.z()) + "]";
-}
 
 }  // namespace
 
@@ -204,45 +195,38 @@ RigConfig RigConfig::from_yaml_text(const std::string& text, const std::string& 
     }
   }
   if (root["seed"]) c.seed = rd.as<std::uint64_t>(root["seed"], "seed");
-  try {
-    c.validate();
-  } catch (const InvalidInputError& e) {
-    throw FileFormatError(source_name, e.what());
-  }
+  validate_parsed_config(c, source_name);
   return c;
 }
 
 RigConfig RigConfig::from_yaml_file(const std::filesystem::path& path) {
-  // Whole-file read through core (names the file and the OS reason, refuses a directory).
-  const std::vector<std::uint8_t> bytes = read_file_bytes(path, kMaxConfigFileBytes);
-  return from_yaml_text(std::string(bytes.begin(), bytes.end()), path.string());
+  return from_yaml_text(read_config_text(path), path.string());
 }
 
 std::string RigConfig::to_yaml() const {
   std::ostringstream o;
   o << "image: {width: " << width << ", height: " << height << "}\n";
-  const auto& in = intrinsics;
-  o << "intrinsics: {fx: " << fmt(in.fx) << ", fy: " << fmt(in.fy) << ", cx: " << fmt(in.cx)
-    << ", cy: " << fmt(in.cy) << "}\n";
-  o << "distortion: {k1: " << fmt(in.k1) << ", k2: " << fmt(in.k2) << ", p1: " << fmt(in.p1)
-    << ", p2: " << fmt(in.p2) << ", k3: " << fmt(in.k3) << "}\n";
-  o << "camera: {position_mm: " << fmt3(camera_position_mm)
-    << ", look_at_mm: " << fmt3(camera_look_at_mm) << ", roll_deg: " << fmt(camera_roll_rad / kDeg)
-    << "}\n";
+  o << camera_intrinsics_yaml(intrinsics);
+  o << "camera: {position_mm: " << format_exact_vector3(camera_position_mm)
+    << ", look_at_mm: " << format_exact_vector3(camera_look_at_mm)
+    << ", roll_deg: " << format_exact_number(camera_roll_rad / kDeg) << "}\n";
   o << "lasers:\n";
   for (const auto& l : lasers)
-    o << "  - {name: " << l.name << ", position_mm: " << fmt3(l.position_mm)
-      << ", normal: " << fmt3(l.normal) << "}\n";
-  o << "line_sigma_mm: " << fmt(line_sigma_mm) << "\nlaser_power: " << fmt(laser_power)
-    << "\nambient: " << fmt(ambient) << "\nnoise_sigma: " << fmt(noise_sigma)
-    << "\nshot_noise_gain: " << fmt(shot_noise_gain)
-    << "\nspeckle_contrast: " << fmt(speckle_contrast)
-    << "\nbloom_fraction: " << fmt(bloom_fraction) << "\nbloom_radius_px: " << fmt(bloom_radius_px)
-    << "\n";
+    o << "  - {name: " << l.name << ", position_mm: " << format_exact_vector3(l.position_mm)
+      << ", normal: " << format_exact_vector3(l.normal) << "}\n";
+  o << "line_sigma_mm: " << format_exact_number(line_sigma_mm)
+    << "\nlaser_power: " << format_exact_number(laser_power)
+    << "\nambient: " << format_exact_number(ambient)
+    << "\nnoise_sigma: " << format_exact_number(noise_sigma)
+    << "\nshot_noise_gain: " << format_exact_number(shot_noise_gain)
+    << "\nspeckle_contrast: " << format_exact_number(speckle_contrast)
+    << "\nbloom_fraction: " << format_exact_number(bloom_fraction)
+    << "\nbloom_radius_px: " << format_exact_number(bloom_radius_px) << "\n";
   o << "platform: {enabled: " << (platform ? "true" : "false")
-    << ", radius_mm: " << fmt(platform_radius_mm) << ", height_mm: " << fmt(platform_height_mm)
-    << ", color: [" << int(platform_color.r) << ", " << int(platform_color.g) << ", "
-    << int(platform_color.b) << "]}\n";
+    << ", radius_mm: " << format_exact_number(platform_radius_mm)
+    << ", height_mm: " << format_exact_number(platform_height_mm) << ", color: ["
+    << int(platform_color.r) << ", " << int(platform_color.g) << ", " << int(platform_color.b)
+    << "]}\n";
   o << "seed: " << seed << "\n";
   return o.str();
 }

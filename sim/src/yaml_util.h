@@ -8,26 +8,17 @@
 #include <initializer_list>
 #include <string>
 
-#include "scanmesh/core/atomic_file.h"
+#include "scanmesh/core/config_file.h"
 #include "scanmesh/core/errors.h"
 
 namespace scanmesh::sim::detail {
-
-//! The whole file as text; IoError "cannot open '<path>': <OS reason>" when it cannot be read.
-inline std::string read_text_file(const std::filesystem::path& path) {
-  const std::vector<std::uint8_t> bytes = read_file_bytes(path, kMaxConfigFileBytes);
-  return std::string(bytes.begin(), bytes.end());
-}
 
 class YamlReader {
  public:
   explicit YamlReader(std::string source) : source_(std::move(source)) {}
 
   [[noreturn]] void fail(const YAML::Node& node, const std::string& problem) const {
-    const YAML::Mark m = node.Mark();
-    if (m.line >= 0)
-      throw FileFormatError(source_, "line " + std::to_string(m.line + 1) + ": " + problem);
-    throw FileFormatError(source_, problem);
+    throw_format_error_at_line(source_, node.Mark().line, problem);
   }
   [[noreturn]] void fail(const std::string& problem) const {
     throw FileFormatError(source_, problem);

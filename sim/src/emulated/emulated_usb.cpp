@@ -383,15 +383,21 @@ gboolean handle_usb_ioctl(UMockdevIoctlBase*, UMockdevIoctlClient* client, gpoin
   }
 }
 
+// The 18-byte device descriptor in hex: `head` (length, type, bcdUSB, class, subclass, protocol,
+// packet size), VID and PID little-endian, then `tail` (bcdDevice, string indices, configurations).
+std::string device_descriptor_hex(const char* head, std::uint16_t vid, std::uint16_t pid,
+                                  const char* tail) {
+  char ids[16];
+  std::snprintf(ids, sizeof ids, "%02x%02x%02x%02x", vid & 0xff, vid >> 8, pid & 0xff, pid >> 8);
+  return head + std::string(ids) + tail;
+}
+
 // Device descriptor + configuration: a minimal CDC-ACM device (USB 2.0, class 2), a CH340
 // (vendor class, one interface, 32-byte bulk endpoints) or an FT232R (vendor interface, 64-byte
 // bulk endpoints).
 std::string descriptors_hex(EmulatedBridge bridge, std::uint16_t vid, std::uint16_t pid) {
-  char device[64];
   if (bridge == EmulatedBridge::Ch34x) {
-    std::snprintf(device, sizeof device, "12011001ff000008%02x%02x%02x%02x640200020001", vid & 0xff,
-                  vid >> 8, pid & 0xff, pid >> 8);
-    return std::string(device) +
+    return device_descriptor_hex("12011001ff000008", vid, pid, "640200020001") +
            "090227000101008031"  // configuration: 39 bytes, 1 interface
            "0904000003ff010200"  // interface 0: vendor class, 3 endpoints
            "07058202200000"      // EP 0x82 bulk IN, 32 bytes
@@ -399,17 +405,13 @@ std::string descriptors_hex(EmulatedBridge bridge, std::uint16_t vid, std::uint1
            "07058103080001";     // EP 0x81 interrupt IN, 8 bytes
   }
   if (bridge == EmulatedBridge::Ftdi) {
-    std::snprintf(device, sizeof device, "1201000200000008%02x%02x%02x%02x000601020301", vid & 0xff,
-                  vid >> 8, pid & 0xff, pid >> 8);
-    return std::string(device) +
+    return device_descriptor_hex("1201000200000008", vid, pid, "000601020301") +
            "09022000010100a02d"  // configuration: 32 bytes, 1 interface
            "0904000002ffffff02"  // interface 0: vendor class, 2 endpoints
            "07058102400000"      // EP 0x81 bulk IN, 64 bytes
            "07050202400000";     // EP 0x02 bulk OUT, 64 bytes
   }
-  std::snprintf(device, sizeof device, "1201000202000040%02x%02x%02x%02x000101020301", vid & 0xff,
-                vid >> 8, pid & 0xff, pid >> 8);
-  return std::string(device) +
+  return device_descriptor_hex("1201000202000040", vid, pid, "000101020301") +
          "09023000020100c032"  // configuration: 48 bytes, 2 interfaces, bus powered
          "090400000102020100"  // interface 0: CDC communication, ACM, AT commands
          "0705820308000a"      // EP 0x82 interrupt IN, 8 bytes, 10 ms
