@@ -190,6 +190,24 @@ std::vector<double> sum_along_h(const std::vector<double>& x, int n_phi, int n_h
   return out;
 }
 
+// Fields of the grid's size with no cell defined yet, labelled with the method that fills them.
+SurfaceFields unfilled_fields(const RangeGrid& grid, CurvatureMethod method) {
+  SurfaceFields f;
+  f.resize(grid.n_phi(), grid.n_h());
+  f.method = method;
+  return f;
+}
+
+// The same for a quadric method, with its radius; the options are checked first, so that bad
+// ones fail before the planes are allocated.
+SurfaceFields unfilled_quadric_fields(const RangeGrid& grid, CurvatureMethod method,
+                                      const QuadricOptions& options) {
+  check_quadric_options(options);
+  SurfaceFields f = unfilled_fields(grid, method);
+  f.radius_mm = options.radius_mm;
+  return f;
+}
+
 double median_radius(const RangeGrid& grid) {
   std::vector<float> r;
   for (std::size_t k = 0; k < grid.cell_count(); ++k)
@@ -202,9 +220,7 @@ double median_radius(const RangeGrid& grid) {
 }  // namespace
 
 SurfaceFields compute_fields_analytic(const RangeGrid& grid) {
-  SurfaceFields f;
-  f.resize(grid.n_phi(), grid.n_h());
-  f.method = CurvatureMethod::Analytic;
+  SurfaceFields f = unfilled_fields(grid, CurvatureMethod::Analytic);
   const ScanSurface surface(grid);
 #pragma omp parallel for schedule(static)
   for (int j = 0; j < grid.n_h(); ++j)
@@ -216,11 +232,7 @@ SurfaceFields compute_fields_analytic(const RangeGrid& grid) {
 }
 
 SurfaceFields compute_fields_quadric(const RangeGrid& grid, const QuadricOptions& options) {
-  check_quadric_options(options);
-  SurfaceFields f;
-  f.resize(grid.n_phi(), grid.n_h());
-  f.method = CurvatureMethod::Quadric;
-  f.radius_mm = options.radius_mm;
+  SurfaceFields f = unfilled_quadric_fields(grid, CurvatureMethod::Quadric, options);
   const std::vector<Eigen::Vector3d> positions = cell_positions(grid);
 #pragma omp parallel
   {
@@ -236,11 +248,7 @@ SurfaceFields compute_fields_quadric(const RangeGrid& grid, const QuadricOptions
 }
 
 SurfaceFields compute_fields_grid_quadric(const RangeGrid& grid, const QuadricOptions& options) {
-  check_quadric_options(options);
-  SurfaceFields f;
-  f.resize(grid.n_phi(), grid.n_h());
-  f.method = CurvatureMethod::GridQuadric;
-  f.radius_mm = options.radius_mm;
+  SurfaceFields f = unfilled_quadric_fields(grid, CurvatureMethod::GridQuadric, options);
   const int n_phi = grid.n_phi(), n_h = grid.n_h();
   const double r_med = median_radius(grid);
   if (r_med <= 0) return f;
@@ -317,9 +325,7 @@ SurfaceFields compute_fields(const RangeGrid& grid, CurvatureMethod method, doub
     }
     case CurvatureMethod::Seed000: {
       const MaxCurvatureMap m = seed000_max_curvature(grid);
-      SurfaceFields f;
-      f.resize(grid.n_phi(), grid.n_h());
-      f.method = CurvatureMethod::Seed000;
+      SurfaceFields f = unfilled_fields(grid, CurvatureMethod::Seed000);
       f.defined = m.defined;
       // The operator as printed gives half the curvature of a circle ((pi - angle) over the sum
       // of both chords); doubled here so all methods report 1/mm on the same scale. The raw

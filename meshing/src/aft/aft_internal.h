@@ -32,6 +32,30 @@ inline Eigen::Vector2d param_midpoint(const Eigen::Vector2d& a, const Eigen::Vec
   return {a.x() + 0.5 * wrap_angle(b.x() - a.x()), 0.5 * (a.y() + b.y())};
 }
 
+//! The signed area of the polygon p (shoelace formula), positive if it runs counter-clockwise.
+inline double signed_area(const std::vector<Eigen::Vector2d>& p) {
+  double a = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const Eigen::Vector2d& u = p[i];
+    const Eigen::Vector2d& v = p[(i + 1) % p.size()];
+    a += u.x() * v.y() - v.x() * u.y();
+  }
+  return 0.5 * a;
+}
+
+//! The periodic copy of the piece q (end points a, b in texture pixels, x unwrapped with period
+//! W) whose midpoint is nearest p's, moved k more periods along x. Crossing tests try
+//! k = -1, 0, 1: the nearest copy by midpoint need not be the one that crosses a long piece.
+template <typename Piece>
+Piece periodic_copy_near(const Piece& p, const Piece& q, double W, int k) {
+  Piece copy = q;
+  const double shift =
+      W * (std::round((0.5 * (p.a.x() + p.b.x()) - 0.5 * (copy.a.x() + copy.b.x())) / W) + k);
+  copy.a.x() += shift;
+  copy.b.x() += shift;
+  return copy;
+}
+
 //! The angle at p of the triangle (p, q, r), in radians.
 inline double angle_at(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
                        const Eigen::Vector3d& r) {

@@ -8,10 +8,13 @@
 #include <map>
 #include <optional>
 
+#include "aft_internal.h"
 #include "scanmesh/core/errors.h"
 
 namespace scanmesh::aft {
 
+using detail::periodic_copy_near;
+using detail::signed_area;
 using Eigen::Vector2d;
 
 namespace {
@@ -183,16 +186,6 @@ std::vector<std::vector<Vector2d>> link_contours(const std::vector<ContourSegmen
   return loops;
 }
 
-double shoelace(const std::vector<Vector2d>& p) {
-  double a = 0;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    const Vector2d& u = p[i];
-    const Vector2d& v = p[(i + 1) % p.size()];
-    a += u.x() * v.y() - v.x() * u.y();
-  }
-  return 0.5 * a;
-}
-
 // Turns round the axis of a closed contour whose x is unwrapped along it.
 int winding(const std::vector<Vector2d>& loop, double W) {
   const Vector2d& last = loop.back();
@@ -279,7 +272,7 @@ std::optional<std::vector<TracedLoop>> trace_at(const ScanSurface& s, const Patc
     const int turns = winding(loop, W);
     // Winding 0: counter-clockwise = an outer boundary, clockwise = a hole (no border). A
     // contour round the axis bounds a component that goes all the way round.
-    if (turns == 0 && shoelace(loop) < o.min_area_px) continue;
+    if (turns == 0 && signed_area(loop) < o.min_area_px) continue;
     TracedLoop t{simplify_closed(std::move(loop), turns, W, o.tolerance_px), turns};
     if (t.pts.size() < 3 || !on_defined_surface(t.pts, turns, s)) return std::nullopt;
     kept.push_back(std::move(t));
@@ -450,11 +443,7 @@ void crossings(const Piece& p, const std::vector<Piece>& border, double W,
   const Vector2d r = p.b - p.a;
   for (const Piece& q0 : border)
     for (int k = -1; k <= 1; ++k) {
-      Piece q = q0;
-      const double shift =
-          W * (std::round((0.5 * (p.a.x() + p.b.x()) - 0.5 * (q.a.x() + q.b.x())) / W) + k);
-      q.a.x() += shift;
-      q.b.x() += shift;
+      const Piece q = periodic_copy_near(p, q0, W, k);
       const Vector2d s = q.b - q.a, w = q.a - p.a;
       const double den = r.x() * s.y() - r.y() * s.x();
       if (std::fabs(den) <= 1e-12 * r.norm() * s.norm()) continue;  // parallel: no crossing

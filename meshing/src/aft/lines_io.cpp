@@ -80,6 +80,15 @@ class PathParser {
       if (cur.size() >= kMaxPoints) fail(file_, line_, "path has too many points");
       cur.push_back(p);
     };
+    // The first control point of a Bezier command at pos: read for the explicit form (C, Q);
+    // for the smooth form (S, T) the previous control point reflected through pos if the
+    // previous command drew the same kind of curve, else pos itself (the SVG path rules).
+    auto first_control_point = [&](char explicit_cmd, char smooth_cmd,
+                                   const Vector2d& base) -> Vector2d {
+      if (std::toupper(static_cast<unsigned char>(cmd)) == explicit_cmd) return base + point();
+      const char p = static_cast<char>(std::toupper(static_cast<unsigned char>(prev_cmd)));
+      return (p == explicit_cmd || p == smooth_cmd) ? Vector2d(2 * pos - last_ctrl) : pos;
+    };
     while (true) {
       skip_separators();
       if (i_ >= d_.size()) break;
@@ -125,13 +134,7 @@ class PathParser {
         case 'C':
         case 'S': {
           need_start(cur, pos);
-          Vector2d c1;
-          if (std::toupper(static_cast<unsigned char>(cmd)) == 'C') {
-            c1 = base + point();
-          } else {
-            const char p = static_cast<char>(std::toupper(static_cast<unsigned char>(prev_cmd)));
-            c1 = (p == 'C' || p == 'S') ? Vector2d(2 * pos - last_ctrl) : pos;
-          }
+          const Vector2d c1 = first_control_point('C', 'S', base);
           const Vector2d c2 = base + point();
           const Vector2d p3 = base + point();
           for (int k = 1; k <= kCurvePieces; ++k) {
@@ -145,13 +148,7 @@ class PathParser {
         case 'Q':
         case 'T': {
           need_start(cur, pos);
-          Vector2d c1;
-          if (std::toupper(static_cast<unsigned char>(cmd)) == 'Q') {
-            c1 = base + point();
-          } else {
-            const char p = static_cast<char>(std::toupper(static_cast<unsigned char>(prev_cmd)));
-            c1 = (p == 'Q' || p == 'T') ? Vector2d(2 * pos - last_ctrl) : pos;
-          }
+          const Vector2d c1 = first_control_point('Q', 'T', base);
           const Vector2d p2 = base + point();
           for (int k = 1; k <= kCurvePieces; ++k) {
             const double t = static_cast<double>(k) / kCurvePieces, s = 1 - t;

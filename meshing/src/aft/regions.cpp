@@ -9,11 +9,14 @@
 #include <sstream>
 #include <tuple>
 
+#include "aft_internal.h"
 #include "scanmesh/core/errors.h"
 #include "scanmesh/meshing/aft/regions.h"
 
 namespace scanmesh::aft {
 
+using detail::periodic_copy_near;
+using detail::signed_area;
 using Eigen::Vector2d;
 
 namespace {
@@ -29,16 +32,6 @@ struct Event {
   double s;  // piece index + t
   int node;
 };
-
-double shoelace(const std::vector<Vector2d>& p) {
-  double a = 0;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    const Vector2d& u = p[i];
-    const Vector2d& v = p[(i + 1) % p.size()];
-    a += u.x() * v.y() - v.x() * u.y();
-  }
-  return 0.5 * a;
-}
 
 bool point_in_polygon_plain(const std::vector<Vector2d>& poly, const Vector2d& q) {
   bool inside = false;
@@ -391,11 +384,7 @@ void add_crossings(const LineSet& set, const PixelLines& lines, const Piece& p, 
   }
   const Vector2d pmin = p.a.cwiseMin(p.b), pmax = p.a.cwiseMax(p.b);
   for (int k = -1; k <= 1; ++k) {
-    Piece q = q0;
-    const double shift =
-        W * (std::round((0.5 * (p.a.x() + p.b.x()) - 0.5 * (q.a.x() + q.b.x())) / W) + k);
-    q.a.x() += shift;
-    q.b.x() += shift;
+    const Piece q = periodic_copy_near(p, q0, W, k);
     const Vector2d qmin = q.a.cwiseMin(q.b), qmax = q.a.cwiseMax(q.b);
     if (qmin.x() > pmax.x() + 1e-9 || qmax.x() < pmin.x() - 1e-9 || qmin.y() > pmax.y() + 1e-9 ||
         qmax.y() < pmin.y() - 1e-9)
@@ -634,7 +623,7 @@ std::vector<int> trace_boundary_cycles(RegionGraph& g, const HalfEdgeFans& fans,
       advance += (e.forward ? 1 : -1) * (pts.back().x() - pts.front().x());
     }
     g.cycles.back().winding = static_cast<int>(std::lround(advance / (2 * M_PI)));
-    g.cycles.back().area = g.cycles.back().winding == 0 ? shoelace(poly) : 0.0;
+    g.cycles.back().area = g.cycles.back().winding == 0 ? signed_area(poly) : 0.0;
   }
   return cycle_of;
 }
