@@ -126,27 +126,10 @@ auto fields_property(std::vector<T> SurfaceFields::*cells) {
   };
 }
 
-}  // namespace
-
-void init_grid(py::module_& m) {
+// The constructors and the geometry: sizes, spacings, every column's angle and row's height.
+void add_grid_geometry(py::class_<RangeGrid>& grid) {
   const RangeGrid defaults(2, 2);
-  py::class_<RangeGrid>(m, "RangeGrid", R"doc(
-The cylindrical range grid (docs/formats.md, "RangeGrid"): cell (i, j) holds the radius r at
-angle phi_i = phi0 + i * 2 pi / n_phi and height h_j = h0 + j * dh (mm, radians; z is the
-turntable axis). The NumPy planes are indexed [j, i] = [h index, phi index]: rows of constant h,
-the lowest h first, as in the .smg file (RangeGrid::index(i, j) = j * n_phi + i). Pictures of
-the grid (texture_image, the PNG exports) are upright instead: their rows are these reversed.
-
-Planes (all zero-copy views into the grid, kept alive by the array):
-  radius      float32 (n_h, n_phi)     read-only (0 in invalid cells)
-  valid       bool    (n_h, n_phi)     read-only
-  confidence  float32 (n_h, n_phi)     read-only, in [0, 1] (0 in invalid cells)
-  color       uint8   (n_h, n_phi, 3)  WRITABLE: assigning to it changes the grid's colours
-The radius, validity and confidence planes are read-only because the library relies on their
-invariants (a valid cell has a finite radius > 0, an invalid one radius 0); change them with
-set_sample / invalidate / set_radius, or build a new grid with RangeGrid.from_arrays.
-)doc")
-      .def(py::init<int, int, double, double, double>(), py::arg("n_phi") = 512,
+  grid.def(py::init<int, int, double, double, double>(), py::arg("n_phi") = 512,
            py::arg("n_h") = 512, py::arg("phi0") = defaults.phi0(), py::arg("h0") = defaults.h0(),
            py::arg("dh") = defaults.dh(),
            "An empty grid (every cell invalid). ValueError for sizes below 2 or dh <= 0.")
@@ -194,8 +177,12 @@ clamped to [0, 1] as RangeGrid::set_sample does (non-finite: 0). `color` is (n_h
           [](const RangeGrid& g) {
             return tabulated(g.n_h(), {g.n_h()}, [&g](int j) { return g.h(j); });
           },
-          "Height of every row, float64 (n_h,) (a new array).")
-      .def_property_readonly(
+          "Height of every row, float64 (n_h,) (a new array).");
+}
+
+// The planes as NumPy views, and the cells' Cartesian positions.
+void add_grid_planes(py::class_<RangeGrid>& grid) {
+  grid.def_property_readonly(
           "radius", plane_property(&RangeGrid::radii),
           "Radius plane, float32 (n_h, n_phi), zero-copy read-only view (0 in invalid cells).")
       .def_property_readonly("valid", plane_property(&RangeGrid::validity),
@@ -239,8 +226,11 @@ clamped to [0, 1] as RangeGrid::set_sample does (non-finite: 0). `color` is (n_h
             const py::ssize_t n = static_cast<py::ssize_t>(v.size() / 3);
             return owned(std::move(v), {n, 3});
           },
-          "Cartesian positions of the valid cells in index order, float64 (N, 3) (a new array).")
-      .def(
+          "Cartesian positions of the valid cells in index order, float64 (N, 3) (a new array).");
+}
+
+void add_grid_editing(py::class_<RangeGrid>& grid) {
+  grid.def(
           "set_sample",
           [](RangeGrid& g, int i, int j, float r, float confidence) {
             if (i < 0 || i >= g.n_phi() || j < 0 || j >= g.n_h())
@@ -286,8 +276,11 @@ clamped to [0, 1] as RangeGrid::set_sample does (non-finite: 0). `color` is (n_h
           py::arg("radius"), py::arg("confidence") = py::none(),
           "Replaces every cell's radius from a (n_h, n_phi) array: finite values > 0 make valid "
           "cells (confidence from `confidence`, default 1), NaN / 0 / negative make holes. "
-          "Existing views see the new values.")
-      .def_property(
+          "Existing views see the new values.");
+}
+
+void add_grid_metadata_and_copies(py::class_<RangeGrid>& grid) {
+  grid.def_property(
           "metadata", [](const RangeGrid& g) { return g.metadata; },
           [](RangeGrid& g, const std::map<std::string, std::string>& entries) {
             g.metadata = entries;
@@ -297,8 +290,12 @@ clamped to [0, 1] as RangeGrid::set_sample does (non-finite: 0). `color` is (n_h
           "copy", [](const RangeGrid& g) { return RangeGrid(g); }, "A deep copy.")
       .def("__copy__", [](const RangeGrid& g) { return RangeGrid(g); })
       .def("__deepcopy__", [](const RangeGrid& g, py::dict) { return RangeGrid(g); })
-      .def(py::self == py::self)  // NOLINT
-      .def(
+      .def(py::self == py::self);  // NOLINT
+}
+
+// .smg bytes and pickling.
+void add_grid_serialization(py::class_<RangeGrid>& grid) {
+  grid.def(
           "to_bytes",
           [](const RangeGrid& g) {
             const auto bytes = encode_grid(g);
@@ -324,12 +321,38 @@ clamped to [0, 1] as RangeGrid::set_sample does (non-finite: 0). `color` is (n_h
             const std::string s = t[0].cast<py::bytes>();
             return decode_grid(std::span(reinterpret_cast<const std::uint8_t*>(s.data()), s.size()),
                                "<pickle>");
-          }))
-      .def("__repr__", [](const RangeGrid& g) {
-        return "<scanmesh.RangeGrid " + std::to_string(g.n_phi()) + " x " +
-               std::to_string(g.n_h()) + ", " + std::to_string(g.valid_count()) + " valid>";
-      });
+          }));
+}
 
+void bind_range_grid(py::module_& m) {
+  py::class_<RangeGrid> grid(m, "RangeGrid", R"doc(
+The cylindrical range grid (docs/formats.md, "RangeGrid"): cell (i, j) holds the radius r at
+angle phi_i = phi0 + i * 2 pi / n_phi and height h_j = h0 + j * dh (mm, radians; z is the
+turntable axis). The NumPy planes are indexed [j, i] = [h index, phi index]: rows of constant h,
+the lowest h first, as in the .smg file (RangeGrid::index(i, j) = j * n_phi + i). Pictures of
+the grid (texture_image, the PNG exports) are upright instead: their rows are these reversed.
+
+Planes (all zero-copy views into the grid, kept alive by the array):
+  radius      float32 (n_h, n_phi)     read-only (0 in invalid cells)
+  valid       bool    (n_h, n_phi)     read-only
+  confidence  float32 (n_h, n_phi)     read-only, in [0, 1] (0 in invalid cells)
+  color       uint8   (n_h, n_phi, 3)  WRITABLE: assigning to it changes the grid's colours
+The radius, validity and confidence planes are read-only because the library relies on their
+invariants (a valid cell has a finite radius > 0, an invalid one radius 0); change them with
+set_sample / invalidate / set_radius, or build a new grid with RangeGrid.from_arrays.
+)doc");
+  add_grid_geometry(grid);
+  add_grid_planes(grid);
+  add_grid_editing(grid);
+  add_grid_metadata_and_copies(grid);
+  add_grid_serialization(grid);
+  grid.def("__repr__", [](const RangeGrid& g) {
+    return "<scanmesh.RangeGrid " + std::to_string(g.n_phi()) + " x " + std::to_string(g.n_h()) +
+           ", " + std::to_string(g.valid_count()) + " valid>";
+  });
+}
+
+void bind_surface_fields(py::module_& m) {
   py::class_<SurfaceFields>(m, "SurfaceFields", R"doc(
 Per-cell normals and principal curvatures of a grid (`curvature`, `read_fields`), in the grid's
 (n_h, n_phi) layout. Arrays are zero-copy read-only views (kept alive by the array):
@@ -368,7 +391,9 @@ mean() and gauss() return new arrays.)doc")
                " x " + std::to_string(f.n_h) + ", " + std::to_string(f.defined_count()) +
                " defined>";
       });
+}
 
+void bind_cleaning(py::module_& m) {
   const CleaningOptions clean_defaults;
   m.def(
       "clean",
@@ -414,7 +439,9 @@ at most that many cells are filled (fill_small_holes; confidence 0). The input i
 Returns (cleaned grid, report dict: valid_before, valid_after, spikes_removed,
 fragments_removed, fragment_cells_removed, components_kept, holes_filled, cells_filled).
 ValueError for negative thresholds.)doc");
+}
 
+void bind_curvature(py::module_& m) {
   m.def(
       "curvature",
       [](const RangeGrid& grid, const std::string& method, double radius_mm) {
@@ -430,6 +457,15 @@ method: "grid-quadric" (the CLI's default), "analytic", "quadric" or "seed" / "s
 000's maximum-curvature operator, k1 only). radius_mm: neighbourhood radius of the quadric
 methods (0: the library default, 6 mm). Returns SurfaceFields. ValueError for an unknown
 method or a radius outside [0, 1e4].)doc");
+}
+
+}  // namespace
+
+void init_grid(py::module_& m) {
+  bind_range_grid(m);
+  bind_surface_fields(m);
+  bind_cleaning(m);
+  bind_curvature(m);
 }
 
 }  // namespace scanmesh::python

@@ -213,9 +213,7 @@ py::dict animesh_report(const AftInput& l, const aft::AnimationMesh& am,
   return d;
 }
 
-}  // namespace
-
-void init_meshing(py::module_& m) {
+void bind_grid_mesh(py::module_& m) {
   const GridMeshOptions gm;
   m.def(
       "grid_mesh",
@@ -244,7 +242,9 @@ whose radii differ by at most max_depth_jump_mm; never across a hole. Returns (M
 info["vertex_cell"] (uint64 (N,), the RangeGrid index j * n_phi + i of each vertex's cell),
 quads_meshed, quads_skipped_for_holes, quads_skipped_for_depth_jumps. ValueError for a
 non-positive depth limit.)doc");
+}
 
+void bind_fans(py::module_& m) {
   const FanOptions fo;
   m.def(
       "build_fans",
@@ -296,113 +296,113 @@ orient_away_from_axis (the CLI sets it for .smg clouds), seed, threads (0: all; 
 not depend on it). The mesh's vertices are the input points, in order.
 Returns (Mesh, stats dict). ValueError with the library's message for invalid options, fewer
 than 3 points or non-finite coordinates.)doc");
+}
 
+// remesh(): the CLI's range checks, the scan clean-up, remeshing, and the report.
+py::tuple remesh_and_report(
+    const Mesh& mesh, int target_vertices, py::handle prepare, std::optional<int> min_component,
+    std::optional<int> fill_holes, std::optional<double> needle_angle_deg, bool remove_spikes,
+    std::optional<double> tip_angle_deg, const std::string& scheme,
+    std::optional<std::filesystem::path> features, double sharp_angle_deg, double kink_angle_deg,
+    double kink_window, double kink_reach_mm, bool label_borders, double gamma, int n_filter,
+    double clip, double curvature_radius, double gradation, double theta_dist_deg,
+    double theta_glatt_deg, int adapt_iterations, int n_area, int n_step, int drive_limit,
+    bool regularize_queue, bool prevent_intersections, int smoothing_passes, int polish_rounds,
+    double polish_angle_deg, int polish_flip_cost, double polish_floor_deg,
+    double polish_floor_glatt_deg, double polish_floor_dist_deg, bool quality) {
+  using namespace remeshing;
+  // The CLI's range checks (cmd_remesh.cpp), for the options remesh() takes as given.
+  const char* w = "remesh";
+  require_range(w, "sharp_angle_deg", sharp_angle_deg, 0, 180);
+  require_range(w, "kink_angle_deg", kink_angle_deg, 0, 180);
+  require_range(w, "kink_window", kink_window, 0, 1e6);
+  require_range(w, "kink_reach_mm", kink_reach_mm, 0, 1e6);
+  require_range(w, "gamma", gamma, 0, 10);
+  require_range(w, "n_filter", n_filter, 0, 1000);
+  require_range(w, "clip", clip, 1, 1000);
+  require_range(w, "curvature_radius", curvature_radius, -1, 1e6);
+  require_range(w, "gradation", gradation, 0, 1000);
+  require_range(w, "theta_dist_deg", theta_dist_deg, 0, 180);
+  require_range(w, "theta_glatt_deg", theta_glatt_deg, 0, 180);
+  require_range(w, "adapt_iterations", adapt_iterations, 0, 1000);
+  require_range(w, "n_area", n_area, 0, 1000);
+  require_range(w, "n_step", n_step, 0, 1000);
+  require_range(w, "drive_limit", drive_limit, 0, 1000);
+  require_range(w, "smoothing_passes", smoothing_passes, 0, 1000);
+  require_range(w, "polish_rounds", polish_rounds, 0, 1000);
+  require_range(w, "polish_angle_deg", polish_angle_deg, 0, 60);
+  require_range(w, "polish_flip_cost", polish_flip_cost, 0, 1000);
+  require_range(w, "polish_floor_deg", polish_floor_deg, 0, 60);
+  require_range(w, "polish_floor_glatt_deg", polish_floor_glatt_deg, 0, 180);
+  require_range(w, "polish_floor_dist_deg", polish_floor_dist_deg, 0, 180);
+  RemeshOptions o;
+  o.target_vertices = target_vertices;
+  o.scheme = parse_remesh_scheme(scheme);
+  SCANMESH_SET_FIELDS(o.skeleton, sharp_angle_deg, kink_angle_deg, kink_window, kink_reach_mm,
+                      label_borders);
+  SCANMESH_SET_FIELDS(o.density, gamma, n_filter, clip, curvature_radius, gradation);
+  SCANMESH_SET_FIELDS(o, theta_dist_deg, theta_glatt_deg, adapt_iterations, n_area, n_step,
+                      drive_limit, regularize_queue, prevent_intersections, smoothing_passes,
+                      polish_rounds, polish_angle_deg, polish_flip_cost, polish_floor_deg,
+                      polish_floor_glatt_deg, polish_floor_dist_deg);
+  if (features) o.features = read_feature_lines(*features);
+  bool prepared = false;
+  const PrepareOptions po =
+      choose_prepare(mesh, target_vertices, prepare, min_component, fill_holes, needle_angle_deg,
+                     remove_spikes, tip_angle_deg, prepared);
+  PrepareStats ps;
+  RemeshResult r;
+  std::string quality_json;
+  {
+    py::gil_scoped_release release;
+    const Mesh input = prepare_input(mesh, po, &ps);
+    r = remesh(input, o);
+    // As the CLI: a count missed by more than 1 % raises (ValueError), it is no result.
+    require_vertex_count(r, target_vertices, topology_stats(input).boundary_loops);
+    if (quality) quality_json = evaluate_remesh(input, r).to_json();
+  }
+  py::dict report;
+  report["stats"] = remesh_stats(r.stats);
+  report["prepared"] = prepared;
+  report["prepare"] = prepare_stats(ps);
+  std::vector<std::uint8_t> kind(r.kind.size());
+  for (std::size_t v = 0; v < r.kind.size(); ++v) kind[v] = static_cast<std::uint8_t>(r.kind[v]);
+  const auto nv = static_cast<py::ssize_t>(kind.size());
+  report["vertex_kind"] = owned(std::move(kind), {nv});
+  const auto nd = static_cast<py::ssize_t>(r.density.size());
+  report["density"] = owned(std::move(r.density), {nd});
+  if (quality) report["quality"] = py::module_::import("json").attr("loads")(quality_json);
+  return py::make_tuple(std::move(r.mesh), report);
+}
+
+void bind_remeshing(py::module_& m) {
   const remeshing::RemeshOptions ro;
-  m.def(
-      "remesh",
-      [](const Mesh& mesh, int target_vertices, py::handle prepare,
-         std::optional<int> min_component, std::optional<int> fill_holes,
-         std::optional<double> needle_angle_deg, bool remove_spikes,
-         std::optional<double> tip_angle_deg, const std::string& scheme,
-         std::optional<std::filesystem::path> features, double sharp_angle_deg,
-         double kink_angle_deg, double kink_window, double kink_reach_mm, bool label_borders,
-         double gamma, int n_filter, double clip, double curvature_radius, double gradation,
-         double theta_dist_deg, double theta_glatt_deg, int adapt_iterations, int n_area,
-         int n_step, int drive_limit, bool regularize_queue, bool prevent_intersections,
-         int smoothing_passes, int polish_rounds, double polish_angle_deg, int polish_flip_cost,
-         double polish_floor_deg, double polish_floor_glatt_deg, double polish_floor_dist_deg,
-         bool quality) {
-        using namespace remeshing;
-        // The CLI's range checks (cmd_remesh.cpp), for the options remesh() takes as given.
-        const char* w = "remesh";
-        require_range(w, "sharp_angle_deg", sharp_angle_deg, 0, 180);
-        require_range(w, "kink_angle_deg", kink_angle_deg, 0, 180);
-        require_range(w, "kink_window", kink_window, 0, 1e6);
-        require_range(w, "kink_reach_mm", kink_reach_mm, 0, 1e6);
-        require_range(w, "gamma", gamma, 0, 10);
-        require_range(w, "n_filter", n_filter, 0, 1000);
-        require_range(w, "clip", clip, 1, 1000);
-        require_range(w, "curvature_radius", curvature_radius, -1, 1e6);
-        require_range(w, "gradation", gradation, 0, 1000);
-        require_range(w, "theta_dist_deg", theta_dist_deg, 0, 180);
-        require_range(w, "theta_glatt_deg", theta_glatt_deg, 0, 180);
-        require_range(w, "adapt_iterations", adapt_iterations, 0, 1000);
-        require_range(w, "n_area", n_area, 0, 1000);
-        require_range(w, "n_step", n_step, 0, 1000);
-        require_range(w, "drive_limit", drive_limit, 0, 1000);
-        require_range(w, "smoothing_passes", smoothing_passes, 0, 1000);
-        require_range(w, "polish_rounds", polish_rounds, 0, 1000);
-        require_range(w, "polish_angle_deg", polish_angle_deg, 0, 60);
-        require_range(w, "polish_flip_cost", polish_flip_cost, 0, 1000);
-        require_range(w, "polish_floor_deg", polish_floor_deg, 0, 60);
-        require_range(w, "polish_floor_glatt_deg", polish_floor_glatt_deg, 0, 180);
-        require_range(w, "polish_floor_dist_deg", polish_floor_dist_deg, 0, 180);
-        RemeshOptions o;
-        o.target_vertices = target_vertices;
-        o.scheme = parse_remesh_scheme(scheme);
-        SCANMESH_SET_FIELDS(o.skeleton, sharp_angle_deg, kink_angle_deg, kink_window, kink_reach_mm,
-                            label_borders);
-        SCANMESH_SET_FIELDS(o.density, gamma, n_filter, clip, curvature_radius, gradation);
-        SCANMESH_SET_FIELDS(o, theta_dist_deg, theta_glatt_deg, adapt_iterations, n_area, n_step,
-                            drive_limit, regularize_queue, prevent_intersections, smoothing_passes,
-                            polish_rounds, polish_angle_deg, polish_flip_cost, polish_floor_deg,
-                            polish_floor_glatt_deg, polish_floor_dist_deg);
-        if (features) o.features = read_feature_lines(*features);
-        bool prepared = false;
-        const PrepareOptions po =
-            choose_prepare(mesh, target_vertices, prepare, min_component, fill_holes,
-                           needle_angle_deg, remove_spikes, tip_angle_deg, prepared);
-        PrepareStats ps;
-        RemeshResult r;
-        std::string quality_json;
-        {
-          py::gil_scoped_release release;
-          const Mesh input = prepare_input(mesh, po, &ps);
-          r = remesh(input, o);
-          // As the CLI: a count missed by more than 1 % raises (ValueError), it is no result.
-          require_vertex_count(r, target_vertices, topology_stats(input).boundary_loops);
-          if (quality) quality_json = evaluate_remesh(input, r).to_json();
-        }
-        py::dict report;
-        report["stats"] = remesh_stats(r.stats);
-        report["prepared"] = prepared;
-        report["prepare"] = prepare_stats(ps);
-        std::vector<std::uint8_t> kind(r.kind.size());
-        for (std::size_t v = 0; v < r.kind.size(); ++v)
-          kind[v] = static_cast<std::uint8_t>(r.kind[v]);
-        const auto nv = static_cast<py::ssize_t>(kind.size());
-        report["vertex_kind"] = owned(std::move(kind), {nv});
-        const auto nd = static_cast<py::ssize_t>(r.density.size());
-        report["density"] = owned(std::move(r.density), {nd});
-        if (quality) report["quality"] = py::module_::import("json").attr("loads")(quality_json);
-        return py::make_tuple(std::move(r.mesh), report);
-      },
-      py::arg("mesh"), py::arg("target_vertices") = ro.target_vertices, py::kw_only(),
-      py::arg("prepare") = "auto", py::arg("min_component") = py::none(),
-      py::arg("fill_holes") = py::none(), py::arg("needle_angle_deg") = py::none(),
-      py::arg("remove_spikes") = false, py::arg("tip_angle_deg") = py::none(),
-      py::arg("scheme") = to_string(ro.scheme), py::arg("features") = py::none(),
-      py::arg("sharp_angle_deg") = ro.skeleton.sharp_angle_deg,
-      py::arg("kink_angle_deg") = ro.skeleton.kink_angle_deg,
-      py::arg("kink_window") = ro.skeleton.kink_window,
-      py::arg("kink_reach_mm") = ro.skeleton.kink_reach_mm,
-      py::arg("label_borders") = ro.skeleton.label_borders, py::arg("gamma") = ro.density.gamma,
-      py::arg("n_filter") = ro.density.n_filter, py::arg("clip") = ro.density.clip,
-      py::arg("curvature_radius") = ro.density.curvature_radius,
-      py::arg("gradation") = ro.density.gradation, py::arg("theta_dist_deg") = ro.theta_dist_deg,
-      py::arg("theta_glatt_deg") = ro.theta_glatt_deg,
-      py::arg("adapt_iterations") = ro.adapt_iterations, py::arg("n_area") = ro.n_area,
-      py::arg("n_step") = ro.n_step, py::arg("drive_limit") = ro.drive_limit,
-      py::arg("regularize_queue") = ro.regularize_queue,
-      py::arg("prevent_intersections") = ro.prevent_intersections,
-      py::arg("smoothing_passes") = ro.smoothing_passes,
-      py::arg("polish_rounds") = ro.polish_rounds,
-      py::arg("polish_angle_deg") = ro.polish_angle_deg,
-      py::arg("polish_flip_cost") = ro.polish_flip_cost,
-      py::arg("polish_floor_deg") = ro.polish_floor_deg,
-      py::arg("polish_floor_glatt_deg") = ro.polish_floor_glatt_deg,
-      py::arg("polish_floor_dist_deg") = ro.polish_floor_dist_deg, py::arg("quality") = false,
-      R"doc(
+  m.def("remesh", &remesh_and_report, py::arg("mesh"),
+        py::arg("target_vertices") = ro.target_vertices, py::kw_only(), py::arg("prepare") = "auto",
+        py::arg("min_component") = py::none(), py::arg("fill_holes") = py::none(),
+        py::arg("needle_angle_deg") = py::none(), py::arg("remove_spikes") = false,
+        py::arg("tip_angle_deg") = py::none(), py::arg("scheme") = to_string(ro.scheme),
+        py::arg("features") = py::none(), py::arg("sharp_angle_deg") = ro.skeleton.sharp_angle_deg,
+        py::arg("kink_angle_deg") = ro.skeleton.kink_angle_deg,
+        py::arg("kink_window") = ro.skeleton.kink_window,
+        py::arg("kink_reach_mm") = ro.skeleton.kink_reach_mm,
+        py::arg("label_borders") = ro.skeleton.label_borders, py::arg("gamma") = ro.density.gamma,
+        py::arg("n_filter") = ro.density.n_filter, py::arg("clip") = ro.density.clip,
+        py::arg("curvature_radius") = ro.density.curvature_radius,
+        py::arg("gradation") = ro.density.gradation, py::arg("theta_dist_deg") = ro.theta_dist_deg,
+        py::arg("theta_glatt_deg") = ro.theta_glatt_deg,
+        py::arg("adapt_iterations") = ro.adapt_iterations, py::arg("n_area") = ro.n_area,
+        py::arg("n_step") = ro.n_step, py::arg("drive_limit") = ro.drive_limit,
+        py::arg("regularize_queue") = ro.regularize_queue,
+        py::arg("prevent_intersections") = ro.prevent_intersections,
+        py::arg("smoothing_passes") = ro.smoothing_passes,
+        py::arg("polish_rounds") = ro.polish_rounds,
+        py::arg("polish_angle_deg") = ro.polish_angle_deg,
+        py::arg("polish_flip_cost") = ro.polish_flip_cost,
+        py::arg("polish_floor_deg") = ro.polish_floor_deg,
+        py::arg("polish_floor_glatt_deg") = ro.polish_floor_glatt_deg,
+        py::arg("polish_floor_dist_deg") = ro.polish_floor_dist_deg, py::arg("quality") = false,
+        R"doc(
 Seed 001 adaptive remeshing to a vertex count (remesh, as `scanmesh remesh`; docs/remeshing.md).
 prepare: "auto" (the CLI's default: the scan clean-up runs when the input looks like a scan),
 True or False; min_component, fill_holes, needle_angle_deg, remove_spikes, tip_angle_deg
@@ -416,7 +416,9 @@ report["stats"]["output_vertices"]. quality=True adds report["quality"] (evaluat
 Returns (Mesh, report dict: stats, prepared, prepare, vertex_kind (uint8 per output vertex: 0
 free, 1 skeleton, 2 branch), density (Psi per input vertex)). ValueError for an empty mesh, a
 target outside [4, 10^7] or an option outside the CLI's range.)doc");
+}
 
+void bind_animesh(py::module_& m) {
   m.def(
       "animesh",
       [](const RangeGrid& grid, std::optional<std::filesystem::path> lines,
@@ -465,7 +467,9 @@ convention) or "bottom" (older files; the CLI's --line-rows); seed and strategy
 region index, report dict: counts, quality, regions, check, complete (False where the CLI exits
 with "incomplete mesh"), params ((phi, h) per vertex), line_edges, seams, data_border).
 FileFormatError (ValueError) for malformed lines or settings, naming the file.)doc");
+}
 
+void bind_regions(py::module_& m) {
   m.def(
       "regions",
       [](const RangeGrid& grid, std::optional<std::filesystem::path> lines,
@@ -488,6 +492,16 @@ The region analysis of animation lines over a grid (as `scanmesh regions`; optio
 animesh). Returns a dict:
 regions (list of dicts: index, name, opening, area, unit_mm, mesher, label_point (phi, h)),
 data_border, text (the CLI's summary).)doc");
+}
+
+}  // namespace
+
+void init_meshing(py::module_& m) {
+  bind_grid_mesh(m);
+  bind_fans(m);
+  bind_remeshing(m);
+  bind_animesh(m);
+  bind_regions(m);
 }
 
 }  // namespace scanmesh::python

@@ -125,9 +125,7 @@ py::dict import_report(const ImportResult& r) {
   return d;
 }
 
-}  // namespace
-
-void init_scan(py::module_& m) {
+void bind_scene(py::module_& m) {
   py::class_<Scene>(m, "Scene", R"doc(
 A simulated scene: analytic shapes and skeletal implicit surfaces with exact geometry
 (docs/simulator.md). Scene.builtin_head(), Scene.from_yaml(path) or Scene.from_yaml_text(text).)doc")
@@ -152,7 +150,9 @@ A simulated scene: analytic shapes and skeletal implicit surfaces with exact geo
                " objects>";
       });
   m.def("builtin_head_yaml", &sim::builtin_head_yaml, "The text of the built-in head scene.");
+}
 
+void bind_scanner_config(py::module_& m) {
   py::class_<ScannerConfig>(m, "ScannerConfig", R"doc(
 The simulated scanner (range_scanner.h, docs/simulator.md). ScannerConfig(**fields) starts from
 the library's defaults; ScannerConfig.builtin_head() is the demo's scanner
@@ -204,7 +204,9 @@ is a read/write attribute; validate() raises ValueError for impossible values.)d
         return "<scanmesh.ScannerConfig " + std::to_string(c.n_phi) + " x " +
                std::to_string(c.n_h) + ", seed " + std::to_string(c.seed) + ">";
       });
+}
 
+void bind_simulation(py::module_& m) {
   static const char* sim_doc = R"doc(
 Simulates a scan (simulate_scan, as `scanmesh sim`). scene: None (the built-in head), a Scene or
 a scene YAML path; scanner: None (the built-in head scanner), a ScannerConfig or a scanner YAML
@@ -236,7 +238,9 @@ noise-free geometry per cell: hit (bool), radius, point, normal, k1, k2 (float64
 index into truth["drop_reasons"]: none, no_hit, outside_band, grazing, occluded, hair_speckle)
 and spike (bool: the measurement was replaced by an outlier).)doc")
           .c_str());
+}
 
+void bind_import(py::module_& m) {
   const ImportOptions io_defaults;
   m.def(
       "import_scan",
@@ -298,6 +302,15 @@ Returns (RangeGrid, report dict: input_kind, method, counts, axis, cell size, tu
 warnings, rotation and origin of the input -> grid frame map p_grid = rotation (p - origin)).
 FileFormatError (ValueError) for a file that cannot be a scan, ValueError for impossible options
 or an unknown extension, IoError (OSError) when the file cannot be read.)doc");
+}
+
+}  // namespace
+
+void init_scan(py::module_& m) {
+  bind_scene(m);
+  bind_scanner_config(m);
+  bind_simulation(m);
+  bind_import(m);
 }
 
 }  // namespace scanmesh::python
