@@ -20,6 +20,7 @@
 #include "scanmesh/core/texture_layout.h"
 #include "scanmesh/meshing/aft/animesh.h"
 #include "scanmesh/meshing/aft/data_border.h"
+#include "scanmesh/meshing/aft/region_setup.h"
 #include "scanmesh/meshing/mesh_check.h"
 #include "scanmesh/reconstruction/curvature_maps.h"
 #include "scanmesh/reconstruction/scan_surface.h"
@@ -160,44 +161,25 @@ Image8 draw_mesh_2d(const RangeGrid& grid, const ScanSurface& surface,
   return im;
 }
 
-struct Loaded {
+// The grid and what set_up_regions made of it. The grid is the first base: the regions'
+// surface refers to it, so it must be built before them and destroyed after them.
+struct LoadedGrid {
   RangeGrid grid;
-  std::unique_ptr<ScanSurface> surface;
-  aft::LineSet lines;  //!< the user's lines clipped to the data border, then the border
-  aft::RegionGraph graph;
-  aft::RegionSettings settings;
-  aft::DataBorderMode border_mode = aft::DataBorderMode::Auto;
-  aft::DataBorderResult border;  //!< its counts (border.lines is moved into `lines`)
 };
-
-// The option wins over the settings file's data_border, which wins over auto.
-aft::DataBorderMode border_mode(const std::string& option, const aft::RegionSettings& settings) {
-  if (!option.empty()) return aft::parse_data_border_mode(option);
-  return settings.data_border.value_or(aft::DataBorderMode::Auto);
-}
-
-// No --lines: no user lines (the data border alone can make a region of a partial scan).
-aft::LineSet user_lines(const std::string& lines_path, int n_h, aft::FileRows rows) {
-  if (lines_path.empty()) return {};
-  return aft::read_lines(lines_path, n_h, rows);
-}
+struct Loaded : LoadedGrid, aft::RegionSetup {};
 
 Loaded load(const std::string& grid_path, const std::string& lines_path,
             const std::string& settings_path, const std::string& data_border,
             const std::string& line_rows) {
   Loaded l;
-  const aft::FileRows rows = aft::parse_file_rows(line_rows);
+  aft::parse_file_rows(line_rows);  // a bad --line-rows before reading the grid, as always
   l.grid = read_grid(grid_path);
-  l.surface = std::make_unique<ScanSurface>(l.grid);
-  if (!settings_path.empty())
-    l.settings = aft::read_region_settings(settings_path, l.grid.n_h(), rows);
-  l.border_mode = border_mode(data_border, l.settings);
-  l.border =
-      aft::with_data_border(user_lines(lines_path, l.grid.n_h(), rows), *l.surface, l.border_mode);
-  l.lines = std::move(l.border.lines);
-  aft::validate_lines(l.lines, *l.surface);
-  l.graph = aft::analyze_regions(l.lines, *l.surface);
-  aft::apply_region_settings(l.graph, l.settings, *l.surface);
+  // No --lines: no user lines (the data border alone can make a region of a partial scan).
+  // The option wins over the settings file's data_border, which wins over auto.
+  static_cast<aft::RegionSetup&>(l) = aft::set_up_regions(
+      l.grid, lines_path.empty() ? std::nullopt : std::optional<std::filesystem::path>(lines_path),
+      settings_path.empty() ? std::nullopt : std::optional<std::filesystem::path>(settings_path),
+      data_border.empty() ? std::nullopt : std::optional<std::string>(data_border), line_rows);
   return l;
 }
 

@@ -11,6 +11,7 @@
 #include "scanmesh/core/point_cloud_io.h"
 #include "scanmesh/meshing/aft/animesh.h"
 #include "scanmesh/meshing/aft/data_border.h"
+#include "scanmesh/meshing/aft/region_setup.h"
 #include "scanmesh/meshing/fans/fans.h"
 #include "scanmesh/meshing/grid_mesh.h"
 #include "scanmesh/meshing/mesh_check.h"
@@ -97,35 +98,7 @@ remeshing::PrepareOptions choose_prepare(const Mesh& raw, int target, py::handle
 }
 
 // What `scanmesh regions` / `animesh` load (cmd_aft.cpp, load()).
-struct AftInput {
-  std::unique_ptr<ScanSurface> surface;
-  aft::LineSet lines;
-  aft::RegionGraph graph;
-  aft::RegionSettings settings;
-  aft::DataBorderMode border_mode = aft::DataBorderMode::Auto;
-  aft::DataBorderResult border;
-};
-
-AftInput load_aft(const RangeGrid& grid, const std::optional<std::filesystem::path>& lines,
-                  const std::optional<std::filesystem::path>& settings,
-                  const std::optional<std::string>& data_border, const std::string& line_rows) {
-  AftInput l;
-  const aft::FileRows rows = aft::parse_file_rows(line_rows);
-  l.surface = std::make_unique<ScanSurface>(grid);
-  if (settings) l.settings = aft::read_region_settings(*settings, grid.n_h(), rows);
-  l.border_mode = data_border ? aft::parse_data_border_mode(*data_border)
-                              : l.settings.data_border.value_or(aft::DataBorderMode::Auto);
-  l.border =
-      aft::with_data_border(lines ? aft::read_lines(*lines, grid.n_h(), rows) : aft::LineSet{},
-                            *l.surface, l.border_mode);
-  l.lines = std::move(l.border.lines);
-  aft::validate_lines(l.lines, *l.surface);
-  l.graph = aft::analyze_regions(l.lines, *l.surface);
-  aft::apply_region_settings(l.graph, l.settings, *l.surface);
-  return l;
-}
-
-py::dict border_dict(const AftInput& l) {
+py::dict border_dict(const aft::RegionSetup& l) {
   py::dict d;
   d["mode"] = aft::to_string(l.border_mode);
   d["on"] = l.border.border_on;
@@ -146,7 +119,7 @@ py::list regions_list(const aft::RegionGraph& g) {
   return regions;
 }
 
-py::dict animesh_report(const AftInput& l, const aft::AnimationMesh& am,
+py::dict animesh_report(const aft::RegionSetup& l, const aft::AnimationMesh& am,
                         const aft::AnimationMeshQuality& q, const MeshCheckReport& check) {
   py::dict d;
   int steiner = 0, unmeshed = 0;
@@ -437,13 +410,14 @@ void bind_animesh(py::module_& m) {
             throw InvalidInputError("animesh: strategy must be random, shortest or longest, got '" +
                                     *strategy + "'");
         }
-        std::unique_ptr<AftInput> l;
+        std::unique_ptr<aft::RegionSetup> l;
         aft::AnimationMesh am;
         aft::AnimationMeshQuality q;
         MeshCheckReport check;
         {
           py::gil_scoped_release release;
-          l = std::make_unique<AftInput>(load_aft(grid, lines, settings, data_border, line_rows));
+          l = std::make_unique<aft::RegionSetup>(
+              aft::set_up_regions(grid, lines, settings, data_border, line_rows));
           if (seed) l->settings.seed = *seed;
           if (order) l->settings.strategy = *order;
           am = aft::build_animation_mesh(l->graph, l->lines, *l->surface, l->settings);
@@ -475,10 +449,11 @@ void bind_regions(py::module_& m) {
       [](const RangeGrid& grid, std::optional<std::filesystem::path> lines,
          std::optional<std::filesystem::path> settings, std::optional<std::string> data_border,
          const std::string& line_rows) {
-        std::unique_ptr<AftInput> l;
+        std::unique_ptr<aft::RegionSetup> l;
         {
           py::gil_scoped_release release;
-          l = std::make_unique<AftInput>(load_aft(grid, lines, settings, data_border, line_rows));
+          l = std::make_unique<aft::RegionSetup>(
+              aft::set_up_regions(grid, lines, settings, data_border, line_rows));
         }
         py::dict d;
         d["regions"] = regions_list(l->graph);
