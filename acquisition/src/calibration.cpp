@@ -8,12 +8,14 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <memory_resource>
 #include <numbers>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 #include <optional>
+#include <vector>
 
 #include "scanmesh/core/errors.h"
 
@@ -380,11 +382,14 @@ class ScannerCalibrator {
   // addresses, so the sizes of its dense SVD's rounding errors depend on where the blocks lie:
   // the variable-size ones come from one arena in a fixed order (with the general heap, their
   // order followed the allocator's history and the uncertainties changed in the 14th digit
-  // from run to run). Each vector is sized once; the arena's first chunk holds them all.
+  // from run to run). Each vector is sized once and the buffer holds them all; the arena has no
+  // upstream, so a block that did not fit would throw instead of landing elsewhere.
   double in_[9] = {};                        // fx fy cx cy k1 k2 p1 p2 k3
   double axis_p_[3] = {}, point_p_[3] = {};  // turntable axis: direction, point
+  std::vector<std::byte> parameter_buffer_ = std::vector<std::byte>(
+      (2 * views_.size() * 6 + 4 * static_cast<std::size_t>(laser_count_)) * sizeof(double) + 1024);
   std::pmr::monotonic_buffer_resource parameter_arena_{
-      (2 * views_.size() * 6 + 4 * static_cast<std::size_t>(laser_count_)) * sizeof(double) + 1024};
+      parameter_buffer_.data(), parameter_buffer_.size(), std::pmr::null_memory_resource()};
   // Per index into `used_`: angle-axis, translation.
   std::pmr::vector<std::array<double, 6>> pose_{&parameter_arena_};
   // Per placement: the board's pose at turntable angle 0.
@@ -575,8 +580,6 @@ void ScannerCalibrator::fit_initial_laser_planes(
 
 void ScannerCalibrator::build_joint_adjustment(ceres::Problem& problem) {
   ceres::LossFunction* loss = new ceres::HuberLoss(opt_.robust_scale);
-  const auto own = ceres::DO_NOT_TAKE_OWNERSHIP;
-  (void)own;
   add_corner_residuals(problem, loss);
   add_laser_residuals(problem, loss);
   problem.AddResidualBlock(new ceres::AutoDiffCostFunction<AxisGauge, 1, 3, 3>(new AxisGauge),

@@ -14,11 +14,8 @@ Image8 histogram_picture(std::span<const std::size_t> counts,
     throw InvalidInputError("histogram '" + title + "': " + std::to_string(counts.size()) +
                             " bins and " + std::to_string(bin_labels.size()) + " labels");
   const int width = 640, height = 400, left = 60, bottom = 40, top = 50;
-  const Rgb8 background{255, 255, 255}, axis{0, 0, 0}, good_colour{60, 150, 80},
-      bad_colour{200, 90, 60};
-  Image8 image(width, height, 3, 255);
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x) image.set_rgb(x, y, background);
+  const Rgb8 axis{0, 0, 0}, good_colour{60, 150, 80}, bad_colour{200, 90, 60};
+  Image8 image(width, height, 3, 255);  // white
   const std::size_t peak =
       std::max<std::size_t>(1, *std::max_element(counts.begin(), counts.end()));
   std::size_t total = 0;

@@ -167,14 +167,13 @@ gboolean answer_fmt(CameraEmulation& cam, UMockdevIoctlClient* client, UMockdevI
   return complete_ioctl(client, 0, 0);
 }
 
+// G_PARM and S_PARM alike: the simulated sensor runs at its own rate whatever is asked, as many
+// webcams do.
 gboolean answer_parm(const CameraEmulation& cam, UMockdevIoctlClient* client,
-                     UMockdevIoctlData* arg, unsigned long request) {
+                     UMockdevIoctlData* arg) {
   const auto& options = cam.camera->options();
   UMockdevIoctlData* d = resolve_arg(arg, sizeof(v4l2_streamparm));
   auto* p = view<v4l2_streamparm>(d);
-  if (request == VIDIOC_S_PARM && p->parm.capture.timeperframe.denominator > 0) {
-    // The simulated sensor runs at its own rate whatever is asked, as many webcams do.
-  }
   p->parm.capture.capability = V4L2_CAP_TIMEPERFRAME;
   p->parm.capture.timeperframe.numerator = 1000;
   p->parm.capture.timeperframe.denominator =
@@ -326,7 +325,7 @@ gboolean handle_v4l2_ioctl(UMockdevIoctlBase*, UMockdevIoctlClient* client, gpoi
       return answer_fmt(*cam, client, arg, request);
     case VIDIOC_G_PARM:
     case VIDIOC_S_PARM:
-      return answer_parm(*cam, client, arg, request);
+      return answer_parm(*cam, client, arg);
     case VIDIOC_S_CTRL:
     case VIDIOC_G_CTRL:
       return answer_ctrl(*cam, client, arg, request);
