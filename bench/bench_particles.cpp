@@ -70,12 +70,7 @@ void print_row(const Row& r, const particles::ImplicitSurface& s) {
     const Vector3d a = r.mesh.positions[t[0]], b = r.mesh.positions[t[1]],
                    c = r.mesh.positions[t[2]];
     q_sum += mean_ratio(a, b, c);
-    double mn = 180;
-    for (int k = 0; k < 3; ++k) {
-      const Vector3d u = r.mesh.positions[t[(k + 1) % 3]] - r.mesh.positions[t[k]];
-      const Vector3d w = r.mesh.positions[t[(k + 2) % 3]] - r.mesh.positions[t[k]];
-      mn = std::min(mn, std::atan2(u.cross(w).norm(), u.dot(w)) * 180 / std::numbers::pi);
-    }
+    const double mn = triangle_min_angle(a, b, c) * 180 / std::numbers::pi;
     min_angle = std::min(min_angle, mn);
     below30 += mn < 30 ? 1 : 0;
     const double d = dist((a + b + c) / 3);

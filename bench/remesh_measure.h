@@ -64,10 +64,7 @@ inline RemeshMeasure measure_remesh(const std::string& method, double seconds, c
   std::size_t ge = 0;
   for (const auto& t : out.triangles) {
     const auto &a = out.positions[t[0]], &b = out.positions[t[1]], &c = out.positions[t[2]];
-    auto ang = [](const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& s) {
-      return std::atan2((q - p).cross(s - p).norm(), (q - p).dot(s - p)) * 180 / M_PI;
-    };
-    const double m = std::min({ang(a, b, c), ang(b, c, a), ang(c, a, b)});
+    const double m = triangle_min_angle(a, b, c) * 180 / M_PI;
     amin = std::min(amin, m);
     ge += m >= 30;
     qsum += std::min(aspect_ratio(a, b, c), 1e6);

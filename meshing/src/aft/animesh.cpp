@@ -125,7 +125,7 @@ class FlipMesh {
     if (it == adj_.end()) return std::nullopt;
     const auto [t1, t2] = it->second;
     if (t1 < 0 || t2 < 0) return std::nullopt;
-    const int p = static_cast<int>(key >> 32), q = static_cast<int>(key & 0xffffffffu);
+    const int p = edge_key_first(key), q = edge_key_second(key);
     const auto opposite = [&](int t) {
       for (int k = 0; k < 3; ++k)
         if (T_[t][k] != p && T_[t][k] != q) return T_[t][k];
@@ -250,7 +250,7 @@ std::vector<int> ideal_valences(const std::vector<std::array<int, 3>>& T,
     }
   std::vector<char> on_border(P.size(), 0);
   for (const auto& [key, tt] : mesh.edges())
-    if (tt[1] < 0) on_border[key >> 32] = on_border[key & 0xffffffffu] = 1;
+    if (tt[1] < 0) on_border[edge_key_first(key)] = on_border[edge_key_second(key)] = 1;
   std::vector<int> ideal(P.size(), 6);
   for (std::size_t v = 0; v < P.size(); ++v)
     if (on_border[v]) ideal[v] = static_cast<int>(std::lround(angle_sum[v] / (M_PI / 3))) + 1;
@@ -273,8 +273,8 @@ int valence_flips(std::vector<std::array<int, 3>>& T, const detail::NodeStore& s
   FlipMesh mesh(T);
   std::vector<int> val(P.size(), 0);
   for (const auto& kv : mesh.edges()) {
-    ++val[kv.first >> 32];
-    ++val[kv.first & 0xffffffffu];
+    ++val[edge_key_first(kv.first)];
+    ++val[edge_key_second(kv.first)];
   }
   const std::vector<int> ideal = ideal_valences(T, P, mesh);
   // Squared deviation of v's valence, changed by d, from its ideal.
@@ -1091,8 +1091,8 @@ AnimationMeshQuality evaluate_quality(const AnimationMesh& am, const ScanSurface
     q.triangles_per_region[label]++;
   }
   for (const auto k : edges) {
-    valence[k >> 32]++;
-    valence[k & 0xffffffffu]++;
+    valence[edge_key_first(k)]++;
+    valence[edge_key_second(k)]++;
   }
   for (int v : valence)
     if (v) q.valence_histogram[v]++;

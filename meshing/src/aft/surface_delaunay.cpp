@@ -229,8 +229,7 @@ class SurfaceDelaunayMesher {
     for (std::size_t t = 0; t < start.size(); ++t) set_triangle(static_cast<int>(t), start[t]);
     std::vector<std::uint64_t> all;
     for (const auto& kv : owner_)
-      all.push_back(
-          edge_key(static_cast<int>(kv.first >> 32), static_cast<int>(kv.first & 0xffffffffu)));
+      all.push_back(edge_key(edge_key_first(kv.first), edge_key_second(kv.first)));
     std::sort(all.begin(), all.end());
     all.erase(std::unique(all.begin(), all.end()), all.end());
     lawson_flips(all);
@@ -295,7 +294,7 @@ class SurfaceDelaunayMesher {
     while (!queue.empty() && guard++ < 200000) {
       const std::uint64_t e = queue.back();
       queue.pop_back();
-      flip_if_better(static_cast<int>(e >> 32), static_cast<int>(e & 0xffffffffu), queue);
+      flip_if_better(edge_key_first(e), edge_key_second(e), queue);
     }
   }
 

@@ -1091,7 +1091,7 @@ struct SpringNetwork::Impl {
         if (f.alive)
           for (int k = 0; k < 3; ++k) half.insert(directed_edge_key(f.v[k], f.v[(k + 1) % 3]));
       for (std::uint64_t h : half) {
-        const int x = static_cast<int>(h >> 32), y = static_cast<int>(h & 0xffffffffu);
+        const int x = edge_key_first(h), y = edge_key_second(h);
         if (half.count(directed_edge_key(y, x))) continue;
         if (verts[x].boundary && verts[y].boundary) continue;  // an original border (scan)
         next[x].push_back(y);
@@ -1388,7 +1388,7 @@ SpringNetwork::SpringNetwork(const Mesh& start, const ParticleOptions& options)
   for (const auto& t : start.triangles)
     for (int k = 0; k < 3; ++k) ++count[directed_edge_key(t[k], t[(k + 1) % 3])];
   for (const auto& [k, n] : count) {
-    const int a = static_cast<int>(k >> 32), b = static_cast<int>(k & 0xffffffffu);
+    const int a = edge_key_first(k), b = edge_key_second(k);
     if (n > 1) throw InvalidInputError("particles: start mesh is not consistently oriented");
     if (!count.count(directed_edge_key(b, a))) m.verts[a].boundary = m.verts[b].boundary = true;
   }

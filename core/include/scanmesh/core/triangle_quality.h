@@ -21,7 +21,7 @@ double aspect_ratio(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Ei
 
 //! Mean ratio 4 sqrt(3) A / (l1^2 + l2^2 + l3^2) in [0, 1]: 1 for the equilateral triangle.
 //! Smooth in the corners (no division by the area), so the AFT's star smoothing compares sums
-//! of it; no report shows it.
+//! of it; of the reports only bench_particles shows it (its q column).
 double mean_ratio(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c);
 
 }  // namespace scanmesh
