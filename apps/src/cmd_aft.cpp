@@ -161,18 +161,16 @@ Image8 draw_mesh_2d(const RangeGrid& grid, const ScanSurface& surface,
   return im;
 }
 
-// The grid and what set_up_regions made of it. The grid is the first base: the regions'
-// surface refers to it, so it must be built before them and destroyed after them.
-struct LoadedGrid {
+// The grid and what set_up_regions made of it (the surface holds its own copy of the grid's
+// planes).
+struct Loaded : aft::RegionSetup {
   RangeGrid grid;
 };
-struct Loaded : LoadedGrid, aft::RegionSetup {};
 
 Loaded load(const std::string& grid_path, const std::string& lines_path,
             const std::string& settings_path, const std::string& data_border,
             const std::string& line_rows) {
   Loaded l;
-  aft::parse_file_rows(line_rows);  // a bad --line-rows before reading the grid, as always
   l.grid = read_grid(grid_path);
   // No --lines: no user lines (the data border alone can make a region of a partial scan).
   // The option wins over the settings file's data_border, which wins over auto.

@@ -12,6 +12,7 @@
 #include "implicit_adapters.h"
 #include "pipeline.h"
 #include "scanmesh/core/atomic_file.h"
+#include "scanmesh/core/config_file.h"
 #include "scanmesh/core/errors.h"
 #include "scanmesh/core/grid_file.h"
 #include "scanmesh/core/image.h"
@@ -74,13 +75,6 @@ Eigen::AlignedBox3d find_bounds(const sim::Scene& scene) {
   return box;
 }
 
-// A scene is a configuration: its size limit holds before it is parsed (a 22 MB scene was read
-// whole and parsed here, 14 s and 1.6 GB, before the scene reader refused it).
-std::string read_scene_text(const std::string& path) {
-  const std::vector<std::uint8_t> bytes = read_file_bytes(path, kMaxConfigFileBytes);
-  return std::string(bytes.begin(), bytes.end());
-}
-
 nlohmann::json mesh_json(const Mesh& m) {
   const TopologyStats s = topology_stats(m);
   return {{"vertices", m.vertex_count()},
@@ -106,7 +100,10 @@ int run_particles(const ParticlesArgs& args) {
   Progress progress("particles");
   o.progress = [&progress](int done, int total) { progress.update(done, total); };
 
-  if (!args.grid.empty() || !sim::AnimatedSkeleton::is_animated_yaml(read_scene_text(args.scene))) {
+  // A scene is a configuration: its size limit holds before it is parsed (a 22 MB scene was
+  // read whole and parsed here, 14 s and 1.6 GB, before the scene reader refused it).
+  if (!args.grid.empty() ||
+      !sim::AnimatedSkeleton::is_animated_yaml(read_config_text(args.scene))) {
     Mesh mesh;
     std::vector<std::uint64_t> ids;
     int iterations = 0;

@@ -97,7 +97,7 @@ remeshing::PrepareOptions choose_prepare(const Mesh& raw, int target, py::handle
   return po;
 }
 
-// What `scanmesh regions` / `animesh` load (cmd_aft.cpp, load()).
+// The data-border counts of a region setup, as the regions / animesh reports give them.
 py::dict border_dict(const aft::RegionSetup& l) {
   py::dict d;
   d["mode"] = aft::to_string(l.border_mode);

@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "scanmesh/core/atomic_file.h"
+#include "scanmesh/core/config_file.h"
 #include "scanmesh/core/errors.h"
 #include "scanmesh/core/texture_layout.h"
 #include "scanmesh/meshing/aft/regions.h"
@@ -191,9 +192,7 @@ void to_grid_rows(RegionSettings& settings, int n_h) {
 }
 
 RegionSettings read_region_settings(const std::filesystem::path& path, int n_h, FileRows rows) {
-  const std::vector<std::uint8_t> bytes = read_file_bytes(path, kMaxConfigFileBytes);
-  RegionSettings settings =
-      parse_region_settings(std::string(bytes.begin(), bytes.end()), path.string());
+  RegionSettings settings = parse_region_settings(read_config_text(path), path.string());
   if (rows == FileRows::FromTop) to_grid_rows(settings, n_h);
   return settings;
 }

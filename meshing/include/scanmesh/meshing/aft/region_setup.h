@@ -16,7 +16,7 @@
 namespace scanmesh::aft {
 
 struct RegionSetup {
-  std::unique_ptr<ScanSurface> surface;  //!< of the grid given to set_up_regions
+  std::unique_ptr<ScanSurface> surface;  //!< of the grid given to set_up_regions (a copy)
   LineSet lines;  //!< the user's lines clipped to the data border, then the border
   RegionGraph graph;
   RegionSettings settings;
@@ -28,8 +28,7 @@ struct RegionSetup {
 //! counted as `line_rows` says, parse_file_rows), clips them to the data border and adds it,
 //! validates them, analyses their regions and applies the settings. The border mode is
 //! `data_border` when given (a parse_data_border_mode name, read after the settings, so that a
-//! bad settings file is reported first), else the settings' data_border, else auto. `grid`
-//! must outlive the result (the surface refers to it).
+//! bad settings file is reported first), else the settings' data_border, else auto.
 RegionSetup set_up_regions(const RangeGrid& grid,
                            const std::optional<std::filesystem::path>& lines_path,
                            const std::optional<std::filesystem::path>& settings_path,
