@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "scanmesh/meshing/mesh_check.h"
-#include "scanmesh/meshing/remeshing/nm_mesh.h"
+#include "scanmesh/meshing/kernel/triangle_mesh.h"
 #include "scanmesh/meshing/remeshing/remesh_quality.h"
 
 namespace scanmesh::bench {

@@ -17,7 +17,7 @@ using Vec3 = Eigen::Vector3d;
 // Vertex adjacency in compressed rows: the neighbours of v are nbr[first[v] .. first[v + 1]).
 struct Adjacency {
   std::vector<int> first, nbr;
-  explicit Adjacency(const NmMesh& m) : first(m.pos.size() + 1, 0) {
+  explicit Adjacency(const TriangleMesh& m) : first(m.pos.size() + 1, 0) {
     const int n = static_cast<int>(m.pos.size());
     std::vector<std::vector<int>> lists(n);
     for (std::size_t f = 0; f < m.tri.size(); ++f) {
@@ -39,7 +39,7 @@ struct Adjacency {
 };
 
 // The vertices within `radius` of v reached over mesh edges (breadth first, v first).
-void collect_patch(const NmMesh& m, const Adjacency& adj, int v, double radius,
+void collect_patch(const TriangleMesh& m, const Adjacency& adj, int v, double radius,
                    std::vector<int>& stamp, std::vector<int>& out) {
   out.assign(1, v);
   stamp[v] = v;
@@ -70,7 +70,7 @@ double graph_kappa_max(double a, double b, double c, double dx, double dy) {
 // kappa_max of the weighted least-squares quadric z = a x^2 + b xy + c y^2 + d x + e y + f over
 // a patch around `centre` (f free: the centre is a noisy sample, not a point of the surface);
 // NaN when the patch does not determine it. At most ~128 of the patch's points are used.
-double patch_kappa_max(const NmMesh& m, const std::vector<Vec3>& normal,
+double patch_kappa_max(const TriangleMesh& m, const std::vector<Vec3>& normal,
                        const std::vector<int>& patch, int centre, double radius) {
   const Vec3 p0 = m.pos[centre];
   auto weight = [&](int u) {
@@ -108,9 +108,9 @@ double patch_kappa_max(const NmMesh& m, const std::vector<Vec3>& normal,
 
 // kappa_max of the least-squares quadric over each vertex's 2-ring (of the vertices flagged in
 // `only`, when given; the others get 0).
-std::vector<double> kappa_on_rings(const NmMesh& m, const std::vector<char>* only);
+std::vector<double> kappa_on_rings(const TriangleMesh& m, const std::vector<char>* only);
 
-double median_edge_length(const NmMesh& m) {
+double median_edge_length(const TriangleMesh& m) {
   std::vector<double> len;
   for (std::size_t f = 0; f < m.tri.size(); f += 7)  // a sample is plenty for a median
     if (m.face_alive[f]) len.push_back((m.pos[m.tri[f][0]] - m.pos[m.tri[f][1]]).norm());
@@ -119,7 +119,7 @@ double median_edge_length(const NmMesh& m) {
   return len[len.size() / 2];
 }
 
-std::vector<double> kappa_at_scale(const NmMesh& m, double radius) {
+std::vector<double> kappa_at_scale(const TriangleMesh& m, double radius) {
   const int n = static_cast<int>(m.pos.size());
   std::vector<Vec3> normal(n, Vec3::Zero());
   for (std::size_t f = 0; f < m.tri.size(); ++f) {
@@ -182,7 +182,7 @@ std::vector<double> kappa_at_scale(const NmMesh& m, double radius) {
   return kappa;
 }
 
-std::vector<double> kappa_on_rings(const NmMesh& m, const std::vector<char>* only) {
+std::vector<double> kappa_on_rings(const TriangleMesh& m, const std::vector<char>* only) {
   const int n = static_cast<int>(m.pos.size());
   std::vector<double> kappa(n, 0.0);
   std::vector<Eigen::Vector3d> normal(n, Eigen::Vector3d::Zero());
@@ -236,12 +236,12 @@ std::vector<double> kappa_on_rings(const NmMesh& m, const std::vector<char>* onl
 
 }  // namespace
 
-std::vector<double> estimate_kappa_max(const NmMesh& m, double radius) {
+std::vector<double> estimate_kappa_max(const TriangleMesh& m, double radius) {
   if (radius > 2 * median_edge_length(m)) return kappa_at_scale(m, radius);
   return kappa_on_rings(m, nullptr);
 }
 
-double density_scale(const NmMesh& m, const std::vector<double>& psi, int target_vertices) {
+double density_scale(const TriangleMesh& m, const std::vector<double>& psi, int target_vertices) {
   double integral = 0;
   for (std::size_t f = 0; f < m.tri.size(); ++f) {
     if (!m.face_alive[f]) continue;
@@ -252,7 +252,7 @@ double density_scale(const NmMesh& m, const std::vector<double>& psi, int target
   return std::sqrt(2.0 / std::sqrt(3.0) * integral / target_vertices);
 }
 
-void limit_gradation(const NmMesh& m, std::vector<double>& psi, int target_vertices,
+void limit_gradation(const TriangleMesh& m, std::vector<double>& psi, int target_vertices,
                      double gradation) {
   if (!(gradation > 0) || target_vertices <= 0) return;
   const int n = static_cast<int>(m.pos.size());
@@ -286,7 +286,7 @@ void limit_gradation(const NmMesh& m, std::vector<double>& psi, int target_verti
   }
 }
 
-std::vector<double> compute_density(const NmMesh& m, const DensityOptions& o) {
+std::vector<double> compute_density(const TriangleMesh& m, const DensityOptions& o) {
   const int n = static_cast<int>(m.pos.size());
   std::vector<double> psi(n, 1.0);
   if (!o.user.empty()) {
@@ -318,7 +318,7 @@ std::vector<double> compute_density(const NmMesh& m, const DensityOptions& o) {
   };
   clip(psi, o.clip);
   // Low-pass (3.3): mean of the neighbours, the vertex itself excluded, across the skeleton.
-  // The neighbour lists are gathered once, in NmMesh::neighbours' order (the sums' order).
+  // The neighbour lists are gathered once, in TriangleMesh::neighbours' order (the sums' order).
   std::vector<int> first(n + 1, 0), nbr;
   if (o.n_filter > 0)
     for (int v = 0; v < n; ++v) {

@@ -28,7 +28,7 @@ int parse_index(const std::string& token, const std::string& name, int line_no) 
 }
 
 // Faces around v grouped into fans connected across manifold non-skeleton edges.
-int count_fans(const NmMesh& m, int v, const std::unordered_map<std::uint64_t, int>& skel_edges,
+int count_fans(const TriangleMesh& m, int v, const std::unordered_map<std::uint64_t, int>& skel_edges,
                const std::set<std::uint64_t>& skel_set) {
   const auto& fs = m.vfaces[v];
   std::vector<int> parent(fs.size());
@@ -138,12 +138,12 @@ Eigen::Vector3d FeatureSkeleton::point(const std::vector<Eigen::Vector3d>& posit
   return (1 - u) * positions[sg.vertices[i]] + u * positions[sg.vertices[i + 1]];
 }
 
-FeatureSkeleton build_feature_skeleton(const NmMesh& m, const FeatureLines& lines,
+FeatureSkeleton build_feature_skeleton(const TriangleMesh& m, const FeatureLines& lines,
                                        const SkeletonOptions& options) {
   FeatureSkeleton sk;
   const int nv = static_cast<int>(m.pos.size());
   const int nf = static_cast<int>(m.tri.size());
-  // The edges of M0 with their radial face lists (NmMesh's, in face order: a hash map of
+  // The edges of M0 with their radial face lists (TriangleMesh's, in face order: a hash map of
   // vectors here was a third of the skeleton's time on the demo head).
   const std::vector<std::uint64_t> edges = m.edges();
   std::set<std::uint64_t> skel;

@@ -145,12 +145,6 @@ class Remesher {
   int start_face(int v, int patch) const;
 
   // ---- mesh helpers ----
-  int add_face(int a, int b, int c, int lab, int patch) {
-    const int f = m_.add_face(a, b, c, lab);
-    if (static_cast<int>(patch_.size()) <= f) patch_.resize(f + 1);
-    patch_[f] = patch;
-    return f;
-  }
   int add_vertex(const VState& st) {
     const int v = m_.add_vertex(position_of(st));
     vs_.push_back(st);
@@ -337,7 +331,7 @@ class Remesher {
 
   RemeshOptions o_;
   const Mesh& input_;
-  NmMesh m0_;
+  TriangleMesh m0_;
   FeatureSkeleton sk_;
   std::vector<double> psi0_, sq0_;
   std::vector<std::array<Vec3, 3>> cn_;  // per input face: per-patch corner normals
@@ -352,7 +346,7 @@ class Remesher {
     const double gap = to_centre - radius - 1e-9 * (to_centre + radius);
     return gap > 0 && gap * gap > best_squared;
   }
-  NmMesh m_;
+  TriangleMesh m_;
   std::vector<VState> vs_;
   std::vector<int> patch_;
   std::unordered_map<std::uint64_t, int> sedge_;  // skeleton edges of M -> segment
@@ -765,19 +759,13 @@ bool Remesher::collapse(int v, int w) {
   }
   const auto ef = m_.edge_faces(v, w);
   if (ef.empty()) return false;
-  // Generalised link condition: common neighbours are exactly the opposite corners of Star(e).
-  std::vector<int> opp;
-  for (int f : ef) opp.push_back(m_.opposite(f, v, w));
   const auto nv = m_.neighbours(v), nw = m_.neighbours(w);
-  for (int x : nv) {
-    if (x == w) continue;
-    if (std::find(nw.begin(), nw.end(), x) != nw.end() &&
-        std::find(opp.begin(), opp.end(), x) == opp.end())
-      return ++st_.rejected_topology, false;
-  }
-  for (int a : opp)
+  if (!m_.link_condition(v, w, ef, nv, nw)) return ++st_.rejected_topology, false;
+  for (int f : ef) {
+    const int a = m_.opposite(f, v, w);
     if (vs_[a].kind == VertexKind::Free && m_.valence(a) <= 3)
       return ++st_.rejected_topology, false;
+  }
   if (vs_[w].kind == VertexKind::Free && nv.size() + nw.size() < 8)
     return ++st_.rejected_topology, false;
   // New state of w: midpoint between two free or two skeleton vertices, else w stays.
@@ -788,20 +776,11 @@ bool Remesher::collapse(int v, int w) {
   } else if (skel && old_w.kind == VertexKind::Skeleton) {
     nw_state.s = 0.5 * (sv.s + old_w.s);
   }
-  // Apply.
-  const std::vector<int> vf = m_.vfaces[v];
-  for (int f : ef) m_.remove_face(f);
-  std::vector<int> moved;
-  for (int f : vf)
-    if (m_.face_alive[f]) {
-      m_.replace_corner(f, v, w);
-      moved.push_back(f);
-    }
+  const kernel::EdgeCollapse collapsed = m_.collapse(v, w);
   const Vec3 old_pos_v = m_.pos[v];
   set_state(w, nw_state);
   if (!faces_ok(m_.vfaces[w])) {
-    for (int f : moved) m_.replace_corner(f, w, v);
-    for (int f : ef) m_.revive_face(f);
+    m_.undo(collapsed);
     set_state(w, old_w);
     m_.pos[v] = old_pos_v;
     ++st_.rejected_error;
@@ -848,21 +827,14 @@ int Remesher::split(int v, int w) {
     project(0.5 * (m_.pos[v] + m_.pos[w]), su.iface, su.bary);
   }
   const int u = add_vertex(su);
-  std::vector<int> changed, added;
-  for (int f : ef) {
-    const auto t = m_.tri[f];
-    std::array<int, 3> t2 = t;
-    for (int& c : t2)
-      if (c == v) c = u;
-    m_.replace_corner(f, w, u);
-    added.push_back(add_face(t2[0], t2[1], t2[2], m_.label[f], patch_[f]));
-    changed.push_back(f);
-  }
-  std::vector<int> check = changed;
-  check.insert(check.end(), added.begin(), added.end());
+  const kernel::EdgeSplit halves = m_.split(v, w, u);
+  if (patch_.size() < m_.tri.size()) patch_.resize(m_.tri.size());
+  for (std::size_t i = 0; i < halves.added.size(); ++i)
+    patch_[halves.added[i]] = patch_[halves.changed[i]];
+  std::vector<int> check = halves.changed;
+  check.insert(check.end(), halves.added.begin(), halves.added.end());
   if (!faces_ok(check)) {
-    for (int f : added) m_.remove_face(f);
-    for (int f : changed) m_.replace_corner(f, u, w);
+    m_.undo(halves);
     m_.remove_vertex(u);
     ++st_.rejected_error;
     note_change(w, Change::Reordered);  // its face list is in another order now
@@ -882,24 +854,13 @@ int Remesher::split(int v, int w) {
 
 bool Remesher::flip(int v, int w, bool check) {
   if (is_skel(v, w)) return false;
-  const auto ef = m_.edge_faces(v, w);
-  if (ef.size() != 2) return false;
-  int f1 = ef[0], f2 = ef[1];
-  // Orient: f1 = (v, w, a) counter-clockwise.
-  {
-    const auto& t = m_.tri[f1];
-    const int i = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
-    if (t[(i + 1) % 3] != w) std::swap(f1, f2);
-  }
-  const int a = m_.opposite(f1, v, w), b = m_.opposite(f2, v, w);
-  if (a == b || m_.edge_face_count(a, b) > 0) return false;
-  m_.replace_corner(f1, w, b);  // (v, b, a)
-  m_.replace_corner(f2, v, a);  // (w, a, b)
+  const auto flipped = m_.flip(v, w);
+  if (!flipped) return false;
+  const int a = flipped->a, b = flipped->b, f1 = flipped->f1, f2 = flipped->f2;
   last_flip_ = {a, b};
   last_flip_faces_ = {f1, f2};
   if (check && (!face_ok(f1) || !face_ok(f2))) {
-    m_.replace_corner(f1, b, w);
-    m_.replace_corner(f2, a, v);
+    m_.undo(*flipped);
     ++st_.rejected_error;
     for (int x : {v, w, a, b}) note_change(x, Change::Reordered);  // face lists reordered
     return false;

@@ -44,7 +44,7 @@ bool on_box_edge_line(const Vec3& p, double s) {
 }
 
 TEST(FeatureSkeleton, TwoBoxesSeamHasThreeSidesAndTwelveCorners) {
-  const NmMesh m(test::two_boxes(10, 6));
+  const TriangleMesh m(test::two_boxes(10, 6));
   const FeatureSkeleton sk = build_feature_skeleton(m, {}, {.sharp_angle_deg = 45});
   EXPECT_EQ(sk.branch_vertex_count(), 12u);  // 8 + 8 corners, 4 shared
   EXPECT_EQ(sk.nonmanifold_edges, 4u * 6);
@@ -68,7 +68,7 @@ TEST(FeatureSkeleton, TwoBoxesSeamHasThreeSidesAndTwelveCorners) {
 
 TEST(FeatureSkeleton, ClosedLoopGetsOneBranchVertexAndKinksSplitIt) {
   // The wavy sheet's border is one closed boundary loop with four 90-degree corners.
-  const NmMesh m(test::wavy_sheet(8, 4, nullptr));
+  const TriangleMesh m(test::wavy_sheet(8, 4, nullptr));
   const FeatureSkeleton sk = build_feature_skeleton(m);
   EXPECT_EQ(sk.branch_vertex_count(), 4u);
   EXPECT_EQ(sk.segments.size(), 4u);
@@ -91,13 +91,13 @@ TEST(FeatureLinesFile, RoundTripAndErrors) {
   EXPECT_THROW(parse_feature_lines("scanmesh_feature_lines 1\ncurve 1 2\n", "x"), FileFormatError);
   EXPECT_THROW(parse_feature_lines("scanmesh_feature_lines 1\nline 1 99999999999\n", "x"),
                FileFormatError);
-  const NmMesh m(test::wavy_sheet(4, 2, nullptr));
+  const TriangleMesh m(test::wavy_sheet(4, 2, nullptr));
   EXPECT_THROW(build_feature_skeleton(m, {{{0, 24}}, {}}), InvalidInputError);  // no such edge
   EXPECT_THROW(build_feature_skeleton(m, {{}, {1000}}), InvalidInputError);
 }
 
 TEST(Density, SphereCurvatureIsOneOverRadius) {
-  const NmMesh m(test::sphere(5.0, 40, 80));
+  const TriangleMesh m(test::sphere(5.0, 40, 80));
   const auto k = estimate_kappa_max(m);
   double sum = 0;
   for (double x : k) sum += x;
@@ -595,7 +595,7 @@ TEST(Density, CurvatureAtTheOutputScaleIgnoresScannerNoise) {
   // patches sees the ellipsoid (error ~ sigma / r^2 plus the patch's own bending).
   const double a = 20, b = 8;
   const Mesh noisy_mesh = test::ellipsoid(a, b, 6, 0.03);
-  const NmMesh exact(test::ellipsoid(a, b, 6)), noisy(noisy_mesh);
+  const TriangleMesh exact(test::ellipsoid(a, b, 6)), noisy(noisy_mesh);
   const double ring_exact = median_relative_error(noisy_mesh, estimate_kappa_max(exact, 0), a, b);
   const double ring_noisy = median_relative_error(noisy_mesh, estimate_kappa_max(noisy, 0), a, b);
   const double scale_noisy =

@@ -12,9 +12,14 @@
 #include <unordered_map>
 #include <vector>
 
-#include "scanmesh/meshing/remeshing/nm_mesh.h"
+#include "scanmesh/meshing/kernel/triangle_mesh.h"
 
 namespace scanmesh::remeshing {
+
+// The remesher works on the kernel's mesh throughout.
+using kernel::EdgeFaceList;
+using kernel::NeighbourList;
+using kernel::TriangleMesh;
 
 //! User constraints: feature lines as chains of input vertex indices joined by input edges, and
 //! fixed vertices (docs/formats.md, "Feature lines").
@@ -75,7 +80,7 @@ struct FeatureSkeleton {
 
 //! Throws InvalidInputError when a feature line names a vertex out of range or two consecutive
 //! vertices that are not joined by an edge.
-FeatureSkeleton build_feature_skeleton(const NmMesh& m0, const FeatureLines& lines = {},
+FeatureSkeleton build_feature_skeleton(const TriangleMesh& m0, const FeatureLines& lines = {},
                                        const SkeletonOptions& options = {});
 
 }  // namespace scanmesh::remeshing

@@ -49,23 +49,23 @@ struct DensityOptions {
 //! gradation limit needs the absolute scale and is applied by remesh (limit_gradation). Throws
 //! InvalidInputError for a user field of the wrong length or with non-positive / non-finite
 //! values.
-std::vector<double> compute_density(const NmMesh& m0, const DensityOptions& options);
+std::vector<double> compute_density(const TriangleMesh& m0, const DensityOptions& options);
 
 //! Per input vertex kappa_max = max(|k1|, |k2|) of a least-squares quadric over the 2-ring
 //! (radius <= 0, or no more than two median input edges) or, at a larger radius, fitted over
 //! the vertices within `radius` reached over mesh edges (another sheet nearer than the radius
 //! stays out) around samples about radius / 2 apart, each vertex taking the distance-weighted
 //! mean of the fits whose patch holds it.
-std::vector<double> estimate_kappa_max(const NmMesh& m0, double radius = 0);
+std::vector<double> estimate_kappa_max(const TriangleMesh& m0, double radius = 0);
 
 //! The scale s of the target edge length h = s sqrt(Psi) that gives `target_vertices`:
 //! V ~ (2 / sqrt 3) * integral of 1 / h^2 over the input.
-double density_scale(const NmMesh& m0, const std::vector<double>& psi, int target_vertices);
+double density_scale(const TriangleMesh& m0, const std::vector<double>& psi, int target_vertices);
 
 //! Lowers Psi where the target edge length h = scale sqrt(Psi) (scale from the vertex count as
 //! in remesh) would grow faster than `gradation` per unit length along the input's edges:
 //! h(v) <= h(w) + gradation |v w| (a multi-source Dijkstra). Only ever refines.
-void limit_gradation(const NmMesh& m0, std::vector<double>& psi, int target_vertices,
+void limit_gradation(const TriangleMesh& m0, std::vector<double>& psi, int target_vertices,
                      double gradation);
 
 //! Optional clean-up of scan meshes before remeshing (not part of seed 001): every boundary loop

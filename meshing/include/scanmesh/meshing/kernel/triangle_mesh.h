@@ -1,0 +1,212 @@
+// The meshing kernel's mesh (issue 28): a triangle list with per-face labels and redundant
+// adjacency (each vertex's faces) kept up to date by every change, with the local operations the
+// meshers share (flip, split, collapse, each with its undo). An edge may carry any number of faces
+// (the remesher's seams, seed 001 §1.6); its radial edge-face list is edge_faces(v, w). Removed
+// faces and vertices stay in the arrays, marked dead. The operations change topology only: whether
+// a change is wanted (lengths, angles, feature lines, a face's distance to the input) is the
+// caller's policy, as in pmp-library's remeshing, which asks its mesh for is_collapse_ok / split /
+// flip. docs/ARCHITECTURE.md, "Meshing kernel".
+#pragma once
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "scanmesh/core/mesh.h"
+#include "scanmesh/meshing/edge_key.h"
+
+namespace scanmesh::kernel {
+
+//! A short list of indices held inline, spilling to the heap past N: what edge_faces and
+//! neighbours return. A remesh asks for them millions of times, and a std::vector each was
+//! ~7 % of its time in malloc / free (perf, lion-head at its own vertex count).
+template <std::size_t N>
+class SmallIndexList {
+ public:
+  void push_back(int x) {
+    if (n_ < N) {
+      inline_[n_] = x;
+    } else {
+      if (n_ == N) heap_.assign(inline_.begin(), inline_.end());
+      heap_.push_back(x);
+    }
+    ++n_;
+  }
+  std::size_t size() const { return n_; }
+  bool empty() const { return n_ == 0; }
+  int operator[](std::size_t i) const { return data()[i]; }
+  const int* begin() const { return data(); }
+  const int* end() const { return data() + n_; }
+  operator std::vector<int>() const { return std::vector<int>(begin(), end()); }
+
+ private:
+  const int* data() const { return n_ <= N ? inline_.data() : heap_.data(); }
+  std::array<int, N> inline_;
+  std::vector<int> heap_;
+  std::size_t n_ = 0;
+};
+using EdgeFaceList = SmallIndexList<6>;    //!< two faces per manifold edge, a few on a seam
+using NeighbourList = SmallIndexList<16>;  //!< a ring
+
+//! The quad around an edge v-w with two faces: f1 = (v, w, a) and f2 = (w, v, b), both
+//! counter-clockwise; a-b is the other diagonal.
+struct EdgeQuad {
+  int f1, f2;
+  int v, w, a, b;
+};
+
+//! What an edge split changed: each face of v-w kept its corner v and got u for w (`changed`),
+//! and a copy of it with u for v was added (`added`, in the same order, same label).
+struct EdgeSplit {
+  int v, w, u;
+  std::vector<int> changed, added;
+};
+
+//! What an edge collapse changed: the faces of v-w were removed (`removed`) and v's other faces
+//! got w for v (`moved`). v is left without faces, still live.
+struct EdgeCollapse {
+  int v, w;
+  std::vector<int> removed, moved;
+};
+
+class TriangleMesh {
+ public:
+  TriangleMesh() = default;
+  //! Copies positions, triangles and labels (label 0 when the mesh has none); vertices in no
+  //! triangle are kept in `pos` but not live. Throws InvalidInputError for bad indices or
+  //! triangles with a repeated corner.
+  explicit TriangleMesh(const Mesh& mesh);
+  //! The same from positions and triangles alone (every label 0).
+  TriangleMesh(std::vector<Eigen::Vector3d> positions,
+               std::span<const std::array<int, 3>> triangles);
+
+  std::vector<Eigen::Vector3d> pos;
+  std::vector<std::array<int, 3>> tri;
+  std::vector<int> label;                //!< per face
+  std::vector<std::vector<int>> vfaces;  //!< per vertex: live incident faces
+  std::vector<char> face_alive, vertex_alive;
+
+  int vertex_count() const { return live_vertices_; }
+  int face_count() const { return live_faces_; }
+
+  int add_vertex(const Eigen::Vector3d& x);
+  int add_face(int a, int b, int c, int face_label);
+  void remove_face(int f);
+  //! Makes a removed face live again with its stored corners (undo of remove_face).
+  void revive_face(int f);
+  void remove_vertex(int v);  //!< the vertex must have no faces left
+  //! Replaces corner `from` of face f by `to` (adjacency updated).
+  void replace_corner(int f, int from, int to);
+  //! Rotates f's corners (the same oriented face) so that `corner` comes first. The meshers
+  //! that wrote their own faces started them at a corner of their choosing; the order of the
+  //! corners decides the order of later sums, and with it their meshes bit for bit.
+  void put_first(int f, int corner);
+
+  //! Radial edge-face list: every live face containing both v and w.
+  EdgeFaceList edge_faces(int v, int w) const;
+  int edge_face_count(int v, int w) const;
+  //! Distinct neighbours of v (unsorted, deterministic order).
+  NeighbourList neighbours(int v) const;
+  //! Number of distinct neighbours. Cached per vertex and forgotten by every change of a face
+  //! at the vertex (the regularisation asks for the same valences hundreds of thousands of
+  //! times between two changes; not thread-safe, like every other use of an TriangleMesh).
+  int valence(int v) const;
+  //! All distinct edges as keys, sorted.
+  std::vector<std::uint64_t> edges() const;
+  //! The corner of f that is neither v nor w.
+  int opposite(int f, int v, int w) const;
+  Eigen::Vector3d face_normal(int f) const;  //!< unit (zero for degenerate faces)
+  double face_area(int f) const;
+
+  // ---- Local operations --------------------------------------------------------------------
+  // Each undo restores the faces' corners and which faces are live, but not the order of the
+  // vertices' face lists: a caller that keeps anything ordered by them (a ring's starting face)
+  // must treat an undone operation as a reordering.
+
+  //! The quad of v-w, oriented from v to w; nullopt unless v-w has exactly two faces with
+  //! different opposite corners.
+  std::optional<EdgeQuad> quad(int v, int w) const;
+  //! Turns v-w into the quad's other diagonal a-b: f1 becomes (v, b, a) and f2 (w, a, b), each
+  //! keeping the slots of the corners it keeps. nullopt, and nothing changed, when v-w has no
+  //! quad or a-b is an edge already (a flip would duplicate it).
+  std::optional<EdgeQuad> flip(int v, int w);
+  void undo(const EdgeQuad& flipped);
+
+  //! Splits v-w at u (a vertex the caller added, with no faces yet); every face of the edge is
+  //! halved. An edge without faces gives an empty split.
+  EdgeSplit split(int v, int w, int u);
+  //! Undoes a split; u is left live without faces (the caller that added it removes it).
+  void undo(const EdgeSplit& split);
+
+  //! The generalised link condition for collapsing v-w (Dey, Edelsbrunner, Guha, Nekhayev 1999,
+  //! for non-manifold edges): every common neighbour of v and w is the opposite corner of a face
+  //! of the edge. `nv`, `nw` are v's and w's neighbours and `star` the edge's faces.
+  bool link_condition(int v, int w, const EdgeFaceList& star, const NeighbourList& nv,
+                      const NeighbourList& nw) const;
+  //! Merges v into w: the faces of v-w are removed and v's other faces get w instead. v keeps no
+  //! faces and stays live until the caller, keeping the collapse, removes it (remove_vertex).
+  EdgeCollapse collapse(int v, int w);
+  void undo(const EdgeCollapse& collapsed);
+
+  //! Drops dead vertices and faces from the arrays: the live ones keep their order and each
+  //! vertex's face list is rebuilt in face order. Returns the old -> new vertex map (-1 for a
+  //! dropped vertex). A live vertex without faces is kept.
+  std::vector<int> compact();
+
+  //! Live parts only, labels kept; `old_to_new` receives the vertex map (-1 for dead).
+  Mesh to_mesh(std::vector<int>* old_to_new = nullptr) const;
+
+ private:
+  void forget_valences(int f);  // the corners of face f
+  int count_neighbours(int v) const;
+  int live_vertices_ = 0, live_faces_ = 0;
+  mutable std::vector<int> valence_cache_;  // per vertex, -1: not known
+};
+
+// The adjacency queries are inline: the remesher asks for them millions of times per run
+// from another translation unit.
+
+inline EdgeFaceList TriangleMesh::edge_faces(int v, int w) const {
+  EdgeFaceList out;
+  for (int f : vfaces[v]) {
+    const auto& t = tri[f];
+    if (t[0] == w || t[1] == w || t[2] == w) out.push_back(f);
+  }
+  return out;
+}
+
+inline int TriangleMesh::edge_face_count(int v, int w) const {
+  int n = 0;
+  for (int f : vfaces[v]) {
+    const auto& t = tri[f];
+    n += (t[0] == w || t[1] == w || t[2] == w) ? 1 : 0;
+  }
+  return n;
+}
+
+inline NeighbourList TriangleMesh::neighbours(int v) const {
+  NeighbourList out;
+  for (int f : vfaces[v])
+    for (int c : tri[f])
+      if (c != v && std::find(out.begin(), out.end(), c) == out.end()) out.push_back(c);
+  return out;
+}
+
+inline int TriangleMesh::valence(int v) const {
+  if (v >= static_cast<int>(valence_cache_.size())) return count_neighbours(v);
+  int& cached = valence_cache_[v];
+  if (cached < 0) cached = count_neighbours(v);
+  return cached;
+}
+
+inline int TriangleMesh::opposite(int f, int v, int w) const {
+  for (int c : tri[f])
+    if (c != v && c != w) return c;
+  return -1;
+}
+
+}  // namespace scanmesh::kernel
