@@ -15,6 +15,7 @@
 
 #include "aft_internal.h"
 #include "scanmesh/core/errors.h"
+#include "scanmesh/meshing/kernel/triangle_mesh.h"
 #include "scanmesh/meshing/mesh_check.h"
 #include "scanmesh/meshing/mesh_topology.h"
 
@@ -89,75 +90,35 @@ class WallCrossingGuard {
   std::optional<detail::TriangleCells> cells_;
 };
 
-// Edge -> its two triangles, kept up to date by the flips (both flip passes below use it).
-class FlipMesh {
+// The flip passes work on the kernel's mesh over T's triangles; T itself is what the crossing
+// guard and the callers read, so every flip is copied back into it.
+class FlipPass {
  public:
-  // The quad around an inner edge: t1 = (a, b, r) and t2 = (b, a, s), counter-clockwise.
-  struct Quad {
-    int a, b, r, s, t1, t2;
-  };
-
-  explicit FlipMesh(std::vector<std::array<int, 3>>& T) : T_(T) {
-    adj_.reserve(2 * T.size());
-    for (std::size_t t = 0; t < T.size(); ++t)
-      for (int k = 0; k < 3; ++k) {
-        auto& e = adj_.try_emplace(edge_key(T[t][k], T[t][(k + 1) % 3]), std::array<int, 2>{-1, -1})
-                      .first->second;
-        (e[0] < 0 ? e[0] : e[1]) = static_cast<int>(t);
-      }
-  }
-  const std::unordered_map<std::uint64_t, std::array<int, 2>>& edges() const { return adj_; }
-  bool has_edge(int x, int y) const { return adj_.count(edge_key(x, y)) > 0; }
-
-  // The quad of edge `key` if a flip may change it: not a constraint, and the diagonal r-s not
-  // already an edge elsewhere.
-  std::optional<Quad> flippable(std::uint64_t key,
-                                const std::unordered_set<std::uint64_t>& constraint) const {
+  FlipPass(std::vector<std::array<int, 3>>& T, const std::vector<Vector3d>& P)
+      : T_(T), mesh_(P, T) {}
+  const kernel::TriangleMesh& mesh() const { return mesh_; }
+  //! The quad of edge `key` if a flip may change it: not a constraint, two faces, and the
+  //! other diagonal not an edge already.
+  std::optional<kernel::EdgeQuad> flippable(
+      std::uint64_t key, const std::unordered_set<std::uint64_t>& constraint) const {
     if (constraint.count(key)) return std::nullopt;
-    const auto f = quad(key);
-    if (!f || has_edge(f->r, f->s)) return std::nullopt;
-    return f;
+    const auto q = mesh_.quad(edge_key_first(key), edge_key_second(key));
+    if (!q || mesh_.edge_face_count(q->a, q->b) > 0) return std::nullopt;
+    return q;
   }
-
-  // The quad of edge `key`; nullopt for a border edge, a gone edge or a degenerate quad.
-  std::optional<Quad> quad(std::uint64_t key) const {
-    const auto it = adj_.find(key);
-    if (it == adj_.end()) return std::nullopt;
-    const auto [t1, t2] = it->second;
-    if (t1 < 0 || t2 < 0) return std::nullopt;
-    const int p = edge_key_first(key), q = edge_key_second(key);
-    const auto opposite = [&](int t) {
-      for (int k = 0; k < 3; ++k)
-        if (T_[t][k] != p && T_[t][k] != q) return T_[t][k];
-      return -1;
-    };
-    int a = p, b = q;  // oriented so that t1 = (a, b, r)
-    int k = 0;
-    while (T_[t1][k] != a) ++k;
-    if (T_[t1][(k + 1) % 3] != b) std::swap(a, b);
-    const int r = opposite(t1), s = opposite(t2);
-    if (r < 0 || s < 0 || r == s) return std::nullopt;
-    return Quad{a, b, r, s, t1, t2};
-  }
-
-  // a-b becomes r-s: t1 = (r, a, s), t2 = (s, b, r).
-  void flip(const Quad& f) {
-    T_[f.t1] = {f.r, f.a, f.s};
-    T_[f.t2] = {f.s, f.b, f.r};
-    adj_.erase(edge_key(f.a, f.b));
-    adj_[edge_key(f.r, f.s)] = {f.t1, f.t2};
-    // the outer edges a-s (was in t2) and b-r (was in t1) change owners
-    const auto reown = [&](int x, int y, int from, int to) {
-      for (int& t : adj_[edge_key(x, y)])
-        if (t == from) t = to;
-    };
-    reown(f.a, f.s, f.t2, f.t1);
-    reown(f.b, f.r, f.t1, f.t2);
+  void flip(const kernel::EdgeQuad& q) {
+    mesh_.flip(q.v, q.w);
+    // The new faces start at the corners the animation meshes' flips have always started them
+    // from (put_first says why).
+    mesh_.put_first(q.f1, q.a);
+    mesh_.put_first(q.f2, q.b);
+    T_[q.f1] = mesh_.tri[q.f1];
+    T_[q.f2] = mesh_.tri[q.f2];
   }
 
  private:
   std::vector<std::array<int, 3>>& T_;
-  std::unordered_map<std::uint64_t, std::array<int, 2>> adj_;
+  kernel::TriangleMesh mesh_;
 };
 
 // The triangle (x, y, z) faces the side its corners' normals point to.
@@ -169,11 +130,11 @@ bool faces_out(const std::vector<Vector3d>& P, const std::vector<Vector3d>& norm
 }
 
 // The smaller minimum angle of the quad's two triangles before and after its flip.
-double min_angle_before(const std::vector<Vector3d>& P, const FlipMesh::Quad& f) {
-  return std::min(min_angle(P[f.a], P[f.b], P[f.r]), min_angle(P[f.b], P[f.a], P[f.s]));
+double min_angle_before(const std::vector<Vector3d>& P, const kernel::EdgeQuad& q) {
+  return std::min(min_angle(P[q.v], P[q.w], P[q.a]), min_angle(P[q.w], P[q.v], P[q.b]));
 }
-double min_angle_after(const std::vector<Vector3d>& P, const FlipMesh::Quad& f) {
-  return std::min(min_angle(P[f.r], P[f.a], P[f.s]), min_angle(P[f.s], P[f.b], P[f.r]));
+double min_angle_after(const std::vector<Vector3d>& P, const kernel::EdgeQuad& q) {
+  return std::min(min_angle(P[q.a], P[q.v], P[q.b]), min_angle(P[q.b], P[q.w], P[q.a]));
 }
 
 // Edge flips that raise the smaller of the two triangles' minimum angles (max-min in 3D),
@@ -184,7 +145,7 @@ int delaunay_flips(std::vector<std::array<int, 3>>& T, const std::vector<Vector3
   int flips = 0;
   // (The edge map was rebuilt from T for every pass; a flip's outcome does not depend on the
   // order of the two triangles, so keeping it up to date gives the same flips.)
-  FlipMesh mesh(T);
+  FlipPass pass_mesh(T, P);
   // The first pass visits every edge; later passes only the edges whose test can now give
   // another answer: the edges of the quads flipped in the pass before, and edges that were
   // refused because their flipped diagonal r-s already existed, once that r-s is flipped away.
@@ -195,8 +156,7 @@ int delaunay_flips(std::vector<std::array<int, 3>>& T, const std::vector<Vector3
   // and angle figures. Key order in every pass, so the result is deterministic.
   std::unordered_map<std::uint64_t, std::vector<std::uint64_t>> blocked_by;
   std::vector<std::uint64_t> keys, dirty;
-  keys.reserve(mesh.edges().size());
-  for (const auto& kv : mesh.edges()) keys.push_back(kv.first);
+  keys = pass_mesh.mesh().edges();
   for (int pass = 0; pass < 30; ++pass) {
     std::sort(keys.begin(), keys.end());
     keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
@@ -204,10 +164,11 @@ int delaunay_flips(std::vector<std::array<int, 3>>& T, const std::vector<Vector3
     int pass_flips = 0;
     for (const std::uint64_t key : keys) {
       if (constraint.count(key)) continue;
-      const auto f = mesh.quad(key);
+      const auto f = pass_mesh.mesh().quad(edge_key_first(key), edge_key_second(key));
       if (!f) continue;
-      const auto [a, b, r, s, t1, t2] = *f;
-      if (mesh.has_edge(r, s)) {
+      // The quad's corners under the names of the docs: edge a-b, opposite corners r and s.
+      const auto [t1, t2, a, b, r, s] = *f;
+      if (pass_mesh.mesh().edge_face_count(r, s) > 0) {
         blocked_by[edge_key(r, s)].push_back(key);
         continue;
       }
@@ -219,7 +180,7 @@ int delaunay_flips(std::vector<std::array<int, 3>>& T, const std::vector<Vector3
           on_wall(P[s], normal[s])) {
         if (guard.crosses({r, a, s}, t1, t2) || guard.crosses({s, b, r}, t1, t2)) continue;
       }
-      mesh.flip(*f);
+      pass_mesh.flip(*f);
       guard.changed(t1);
       guard.changed(t2);
       for (const std::uint64_t k :
@@ -241,7 +202,7 @@ int delaunay_flips(std::vector<std::array<int, 3>>& T, const std::vector<Vector3
 // The ideal valence of every vertex: 6 inside the mesh, 1 + round(angle sum / 60 deg) on its
 // border (4 at a straight border, 3 at a right-angled corner).
 std::vector<int> ideal_valences(const std::vector<std::array<int, 3>>& T,
-                                const std::vector<Vector3d>& P, const FlipMesh& mesh) {
+                                const std::vector<Vector3d>& P, const kernel::TriangleMesh& mesh) {
   std::vector<double> angle_sum(P.size(), 0);
   for (const auto& t : T)
     for (int k = 0; k < 3; ++k) {
@@ -249,8 +210,10 @@ std::vector<int> ideal_valences(const std::vector<std::array<int, 3>>& T,
       angle_sum[t[k]] += std::acos(std::clamp(u.dot(w) / (u.norm() * w.norm()), -1.0, 1.0));
     }
   std::vector<char> on_border(P.size(), 0);
-  for (const auto& [key, tt] : mesh.edges())
-    if (tt[1] < 0) on_border[edge_key_first(key)] = on_border[edge_key_second(key)] = 1;
+  for (const std::uint64_t key : mesh.edges()) {
+    const int x = edge_key_first(key), y = edge_key_second(key);
+    if (mesh.edge_face_count(x, y) == 1) on_border[x] = on_border[y] = 1;
+  }
   std::vector<int> ideal(P.size(), 6);
   for (std::size_t v = 0; v < P.size(); ++v)
     if (on_border[v]) ideal[v] = static_cast<int>(std::lround(angle_sum[v] / (M_PI / 3))) + 1;
@@ -270,13 +233,13 @@ int valence_flips(std::vector<std::array<int, 3>>& T, const detail::NodeStore& s
                   double floor_rad, std::vector<char>& flipped_corners, WallCrossingGuard& guard) {
   const std::vector<Vector3d>& P = store.pos;
   flipped_corners.assign(P.size(), 0);
-  FlipMesh mesh(T);
+  FlipPass pass_mesh(T, P);
   std::vector<int> val(P.size(), 0);
-  for (const auto& kv : mesh.edges()) {
-    ++val[edge_key_first(kv.first)];
-    ++val[edge_key_second(kv.first)];
+  for (const std::uint64_t key : pass_mesh.mesh().edges()) {
+    ++val[edge_key_first(key)];
+    ++val[edge_key_second(key)];
   }
-  const std::vector<int> ideal = ideal_valences(T, P, mesh);
+  const std::vector<int> ideal = ideal_valences(T, P, pass_mesh.mesh());
   // Squared deviation of v's valence, changed by d, from its ideal.
   const auto dev = [&](int v, int d) {
     const int x = val[v] + d - ideal[v];
@@ -289,14 +252,12 @@ int valence_flips(std::vector<std::array<int, 3>>& T, const detail::NodeStore& s
   // the passes end; five were enough on the sample head at its units and at a quarter of them.
   int flips = 0;
   for (int pass = 0; pass < 5; ++pass) {
-    std::vector<std::uint64_t> keys;
-    for (const auto& kv : mesh.edges()) keys.push_back(kv.first);
-    std::sort(keys.begin(), keys.end());
+    const std::vector<std::uint64_t> keys = pass_mesh.mesh().edges();  // sorted
     int pass_flips = 0;
     for (const std::uint64_t key : keys) {
-      const auto f = mesh.flippable(key, constraint);
+      const auto f = pass_mesh.flippable(key, constraint);
       if (!f) continue;
-      const auto [a, b, r, s, t1, t2] = *f;
+      const auto [t1, t2, a, b, r, s] = *f;  // edge a-b, opposite corners r and s
       if (dev(a, -1) + dev(b, -1) + dev(r, 1) + dev(s, 1) >=
           dev(a, 0) + dev(b, 0) + dev(r, 0) + dev(s, 0))
         continue;
@@ -316,7 +277,7 @@ int valence_flips(std::vector<std::array<int, 3>>& T, const detail::NodeStore& s
           on_wall(P[r], store.normal[r]) || on_wall(P[s], store.normal[s])) {
         if (guard.crosses({r, a, s}, t1, t2) || guard.crosses({s, b, r}, t1, t2)) continue;
       }
-      mesh.flip(*f);
+      pass_mesh.flip(*f);
       guard.changed(t1);
       guard.changed(t2);
       for (const int v : {a, b, r, s}) flipped_corners[v] = 1;
