@@ -11,6 +11,7 @@
 
 #include "scanmesh/core/errors.h"
 #include "scanmesh/meshing/edge_key.h"
+#include "scanmesh/meshing/kernel/triangle_mesh.h"
 #include "scanmesh/meshing/mesh_topology.h"
 #include "scanmesh/meshing/particles/particles.h"
 
@@ -31,10 +32,9 @@ struct Spring {
   bool special = false;     // §4.4 Step 2: reduced rest length, never split
 };
 
-struct Vertex {
-  Vector3d p = Vector3d::Zero();
+// What a particle carries besides its position and faces (which the kernel's mesh holds).
+struct Particle {
   std::uint64_t id = 0;
-  bool alive = true;
   bool boundary = false;  // on an open border (scan mode): slides along it (decision 19)
   bool defined = false;   // F could be evaluated at p this step
   // Decision 44 (scan mode, relax() past the flip freeze): untangling moves so far, the
@@ -48,12 +48,6 @@ struct Vertex {
     damping = 1.0;
   }
   ImplicitValue f;
-  std::vector<int> faces;
-};
-
-struct Face {
-  std::array<int, 3> v{};
-  bool alive = true;
 };
 
 // Union-find over vertex indices, joined triangle by triangle: the connected components of
@@ -102,71 +96,43 @@ double min_angle(const Vector3d& a, const Vector3d& b, const Vector3d& c) {
 
 struct SpringNetwork::Impl {
   ParticleOptions o;
-  std::vector<Vertex> verts;
-  std::vector<Face> faces;
+  kernel::TriangleMesh mesh;        // positions, faces and adjacency
+  std::vector<Particle> particles;  // per vertex of `mesh`
   std::unordered_map<std::uint64_t, Spring> springs;
   std::uint64_t next_id = 0;
   int iter = 0;
-  std::size_t dead_faces = 0, dead_verts = 0;
 
   double R() const { return o.edge_length; }
-  const Vector3d& P(int v) const { return verts[v].p; }
+  const Vector3d& P(int v) const { return mesh.pos[v]; }
   double length(int a, int b) const { return (P(a) - P(b)).norm(); }
 
   int add_vertex(const Vector3d& p) {
-    Vertex v;
-    v.p = p;
-    v.id = next_id++;
-    verts.push_back(std::move(v));
-    return static_cast<int>(verts.size()) - 1;
+    Particle q;
+    q.id = next_id++;
+    particles.push_back(std::move(q));
+    return mesh.add_vertex(p);
   }
-  int add_face(int a, int b, int c) {
-    faces.push_back({{a, b, c}, true});
-    const int f = static_cast<int>(faces.size()) - 1;
-    for (int v : {a, b, c}) verts[v].faces.push_back(f);
-    return f;
-  }
-  void kill_face(int f) {
-    faces[f].alive = false;
-    ++dead_faces;
-    for (int v : faces[f].v) std::erase(verts[v].faces, f);
-  }
-  void kill_vertex(int v) {
-    verts[v].alive = false;
-    verts[v].faces.clear();
-    ++dead_verts;
-  }
-  // Faces containing both a and b.
-  std::vector<int> edge_faces(int a, int b) const {
-    std::vector<int> r;
-    for (int f : verts[a].faces) {
-      const auto& t = faces[f].v;
-      if (t[0] == b || t[1] == b || t[2] == b) r.push_back(f);
-    }
-    return r;
-  }
-  int opposite(int f, int a, int b) const {
-    for (int v : faces[f].v)
-      if (v != a && v != b) return v;
-    return -1;
-  }
+  int add_face(int a, int b, int c) { return mesh.add_face(a, b, c, 0); }
+  void kill_face(int f) { mesh.remove_face(f); }
+  void kill_vertex(int v) { mesh.remove_vertex(v); }
+  std::size_t dead_faces() const { return mesh.tri.size() - mesh.face_count(); }
+  // Faces containing both a and b (a vector: the rules reorder them).
+  std::vector<int> edge_faces(int a, int b) const { return mesh.edge_faces(a, b); }
+  int opposite(int f, int a, int b) const { return mesh.opposite(f, a, b); }
   // True if the face traverses a -> b.
   bool has_directed(int f, int a, int b) const {
-    const auto& t = faces[f].v;
+    const auto& t = mesh.tri[f];
     for (int k = 0; k < 3; ++k)
       if (t[k] == a && t[(k + 1) % 3] == b) return true;
     return false;
   }
+  // Sorted: the rules visit neighbours in index order.
   std::vector<int> neighbors(int a) const {
-    std::vector<int> r;
-    for (int f : verts[a].faces)
-      for (int v : faces[f].v)
-        if (v != a) r.push_back(v);
+    std::vector<int> r = mesh.neighbours(a);
     std::sort(r.begin(), r.end());
-    r.erase(std::unique(r.begin(), r.end()), r.end());
     return r;
   }
-  int valence(int a) const { return static_cast<int>(neighbors(a).size()); }
+  int valence(int a) const { return mesh.valence(a); }
   Vector3d face_normal(const std::array<int, 3>& t) const {
     return (P(t[1]) - P(t[0])).cross(P(t[2]) - P(t[0]));
   }
@@ -187,10 +153,10 @@ struct SpringNetwork::Impl {
   void rebuild_springs() {
     std::unordered_map<std::uint64_t, Spring> next;
     next.reserve(springs.size() + 16);
-    for (const Face& f : faces) {
-      if (!f.alive) continue;
+    for (std::size_t f = 0; f < mesh.tri.size(); ++f) {
+      if (!mesh.face_alive[f]) continue;
       for (int k = 0; k < 3; ++k) {
-        const int a = f.v[k], b = f.v[(k + 1) % 3];
+        const int a = mesh.tri[f][k], b = mesh.tri[f][(k + 1) % 3];
         const std::uint64_t key = edge_key(a, b);
         if (next.count(key)) continue;
         const auto it = springs.find(key);
@@ -203,39 +169,29 @@ struct SpringNetwork::Impl {
 
   // Drops dead vertices and faces (indices change; ids do not).
   void compact() {
-    std::vector<int> vmap(verts.size(), -1);
-    std::vector<Vertex> nv;
-    for (std::size_t i = 0; i < verts.size(); ++i)
-      if (verts[i].alive) {
-        vmap[i] = static_cast<int>(nv.size());
-        nv.push_back(std::move(verts[i]));
-        nv.back().faces.clear();
-      }
-    std::vector<Face> nf;
-    for (const Face& f : faces)
-      if (f.alive) nf.push_back({{vmap[f.v[0]], vmap[f.v[1]], vmap[f.v[2]]}, true});
-    for (std::size_t f = 0; f < nf.size(); ++f)
-      for (int v : nf[f].v) nv[v].faces.push_back(static_cast<int>(f));
+    const std::vector<int> vmap = mesh.compact();
+    std::vector<Particle> kept;
+    kept.reserve(mesh.pos.size());
+    for (std::size_t i = 0; i < particles.size(); ++i)
+      if (vmap[i] >= 0) kept.push_back(std::move(particles[i]));
     std::unordered_map<std::uint64_t, Spring> ns;
     ns.reserve(springs.size());
     for (const auto& [k, s] : springs) {
       const int a = vmap[edge_key_first(k)], b = vmap[edge_key_second(k)];
       if (a >= 0 && b >= 0) ns.emplace(edge_key(a, b), s);
     }
-    verts = std::move(nv);
-    faces = std::move(nf);
+    particles = std::move(kept);
     springs = std::move(ns);
     keys_valid_ = false;
-    dead_faces = dead_verts = 0;
     lost_steps_.clear();  // indices changed; the counters start again
   }
 
   void evaluate_all(const ImplicitSurface& s) {
-#pragma omp parallel for schedule(static) if (verts.size() > 20000)
-    for (std::size_t i = 0; i < verts.size(); ++i) {
-      Vertex& v = verts[i];
-      if (!v.alive) continue;
-      const auto f = s.evaluate(v.p);
+#pragma omp parallel for schedule(static) if (particles.size() > 20000)
+    for (std::size_t i = 0; i < particles.size(); ++i) {
+      Particle& v = particles[i];
+      if (!mesh.vertex_alive[i]) continue;
+      const auto f = s.evaluate(mesh.pos[i]);
       v.defined = f.has_value();
       if (f) v.f = *f;
     }
@@ -248,8 +204,8 @@ struct SpringNetwork::Impl {
   // untangling then took back, and the springs pushed it there again: a cycle of ~15 steps
   // that kept relax() from converging on scans (docs/particles.md, decision 41).
   bool keeps_orientation(int v, const Vector3d& q, const Vector3d& n) const {
-    for (int f : verts[v].faces) {
-      const auto& t = faces[f].v;
+    for (int f : mesh.vfaces[v]) {
+      const auto& t = mesh.tri[f];
       const Vector3d g = corner_gradients(t).value_or(n);
       std::array<Vector3d, 3> x{P(t[0]), P(t[1]), P(t[2])};
       if ((x[1] - x[0]).cross(x[2] - x[0]).dot(g) <= 0.0) continue;  // already turned
@@ -263,8 +219,8 @@ struct SpringNetwork::Impl {
   std::optional<Vector3d> corner_gradients(const std::array<int, 3>& t) const {
     Vector3d g = Vector3d::Zero();
     for (int v : t) {
-      if (!verts[v].defined) return std::nullopt;
-      g += verts[v].f.gradient;
+      if (!particles[v].defined) return std::nullopt;
+      g += particles[v].f.gradient;
     }
     return g;
   }
@@ -274,17 +230,16 @@ struct SpringNetwork::Impl {
     const auto ef = edge_faces(a, b);
     // Gap (decisions 19, 35): border particles are not merged with interior ones; a border
     // edge (one face, both ends on the border) may collapse along the border.
-    const bool border_edge = ef.size() == 1 && verts[a].boundary && verts[b].boundary;
-    if (!border_edge && (verts[a].boundary || verts[b].boundary)) return false;
+    const bool border_edge = ef.size() == 1 && particles[a].boundary && particles[b].boundary;
+    if (!border_edge && (particles[a].boundary || particles[b].boundary)) return false;
     if (ef.size() != 2 && !border_edge) return false;
     const int c = opposite(ef[0], a, b), d = border_edge ? -1 : opposite(ef[1], a, b);
     if (c == d) return false;
-    const auto na = neighbors(a), nb = neighbors(b);
-    std::vector<int> common;
-    std::set_intersection(na.begin(), na.end(), nb.begin(), nb.end(), std::back_inserter(common));
     // Link condition (not in the report, needed for a manifold result): the common neighbours
     // of a and b are exactly the two opposite vertices (the one, for a border edge).
-    if (common.size() != ef.size()) return false;
+    if (!mesh.link_condition(a, b, mesh.edge_faces(a, b), mesh.neighbours(a), mesh.neighbours(b)))
+      return false;
+    const auto na = neighbors(a), nb = neighbors(b);
     if (valence(c) <= 3 || (d >= 0 && valence(d) <= 3)) return false;
     if (na.size() + nb.size() - 2 - ef.size() < 3) return false;  // merged valence
     // A border particle that swallowed its border neighbours again and again would collect a
@@ -293,9 +248,9 @@ struct SpringNetwork::Impl {
     const Vector3d m = 0.5 * (P(a) + P(b));
     // No face around a or b may flip or degenerate when its corner moves to m.
     for (int v : {a, b})
-      for (int f : verts[v].faces) {
+      for (int f : mesh.vfaces[v]) {
         if (std::find(ef.begin(), ef.end(), f) != ef.end()) continue;
-        auto t = faces[f].v;
+        auto t = mesh.tri[f];
         const Vector3d before = face_normal(t);
         for (int& x : t)
           if (x == a || x == b) x = -1;
@@ -305,12 +260,7 @@ struct SpringNetwork::Impl {
         if (after.dot(before) <= 0.2 * before.norm() * after.norm()) return false;
         if (min_angle(q[0], q[1], q[2]) < 5.0 * std::numbers::pi / 180.0) return false;
       }
-    for (int f : ef) kill_face(f);
-    for (int f : verts[b].faces) {
-      for (int& x : faces[f].v)
-        if (x == b) x = a;
-      verts[a].faces.push_back(f);
-    }
+    mesh.collapse(b, a);
     springs.erase(edge_key(a, b));
     keys_valid_ = false;
     for (int x : nb) {
@@ -321,9 +271,9 @@ struct SpringNetwork::Impl {
       springs.erase(it);
       if (x != c && x != d) springs[edge_key(a, x)] = s;
     }
-    verts[a].p = m;
-    verts[a].id = next_id++;  // a merged particle is a new particle (docs/particles.md)
-    verts[a].reset_calming();
+    mesh.pos[a] = m;
+    particles[a].id = next_id++;  // a merged particle is a new particle (docs/particles.md)
+    particles[a].reset_calming();
     if (static_cast<std::size_t>(a) < lost_steps_.size()) lost_steps_[a] = 0;
     kill_vertex(b);
     for (int x : neighbors(a)) mark(a, x);
@@ -355,8 +305,8 @@ struct SpringNetwork::Impl {
     kill_face(ef[0]);
     kill_face(ef[1]);
     const int m = add_vertex(mid);
-    verts[m].f = verts[a].f;
-    verts[m].defined = false;
+    particles[m].f = particles[a].f;
+    particles[m].defined = false;
     add_face(a, m, c);
     add_face(m, b, c);
     add_face(b, m, d);
@@ -381,7 +331,7 @@ struct SpringNetwork::Impl {
     if (!has_directed(ef[0], a, b) || !has_directed(ef[1], b, a)) return false;
     const int c = opposite(ef[0], a, b), d = opposite(ef[1], a, b);
     if (c == d || springs.count(edge_key(c, d))) return false;
-    auto target = [&](int v) { return verts[v].boundary ? 4 : 6; };
+    auto target = [&](int v) { return particles[v].boundary ? 4 : 6; };
     const int va = fast_valence(a), vb = fast_valence(b), vc = fast_valence(c),
               vd = fast_valence(d);
     if (va <= 3 || vb <= 3) return false;
@@ -394,7 +344,7 @@ struct SpringNetwork::Impl {
     const std::array<int, 3> t0{a, d, c}, t1{b, c, d};
     const Vector3d n0 = face_normal(t0), n1 = face_normal(t1);
     const Vector3d old_n =
-        face_normal(faces[ef[0]].v).normalized() + face_normal(faces[ef[1]].v).normalized();
+        face_normal(mesh.tri[ef[0]]).normalized() + face_normal(mesh.tri[ef[1]]).normalized();
     if (mode != kDelaunay && n0.dot(n1) < 0.5 * n0.norm() * n1.norm()) return false;  // crease
     if (n0.dot(old_n) <= 0.0 || n1.dot(old_n) <= 0.0) return false;
     const double min_new = std::min(min_angle(P(a), P(d), P(c)), min_angle(P(b), P(c), P(d)));
@@ -402,12 +352,9 @@ struct SpringNetwork::Impl {
     if (min_new < std::min(min_old, 10.0 * std::numbers::pi / 180.0)) return false;
     const double rest =
         0.25 * (spring(a, c).rest + spring(b, c).rest + spring(a, d).rest + spring(b, d).rest);
-    faces[ef[0]].v = t0;
-    faces[ef[1]].v = t1;
-    std::erase(verts[a].faces, ef[1]);
-    std::erase(verts[b].faces, ef[0]);
-    verts[c].faces.push_back(ef[1]);
-    verts[d].faces.push_back(ef[0]);
+    if (!mesh.flip(a, b)) return false;
+    mesh.put_first(ef[0], a);  // t0, started where the network's flips always started it
+    mesh.put_first(ef[1], b);  // t1 (put_first says why)
     springs.erase(edge_key(a, b));
     keys_valid_ = false;
     springs[edge_key(c, d)] = make_spring(c, d, rest);
@@ -425,7 +372,7 @@ struct SpringNetwork::Impl {
   // cancelled by an improving flip (it met a defect of opposite sign, e.g. an isolated 5) the
   // path is kept, otherwise it is undone. Returns the number of cancelled pairs.
   bool improving_flip_around(int x) {
-    if (!verts[x].alive) return false;
+    if (!mesh.vertex_alive[x]) return false;
     for (int y : neighbors(x))
       if (try_flip(x, y)) return true;
     return false;
@@ -433,9 +380,9 @@ struct SpringNetwork::Impl {
   int remove_dislocations(int max_glide) {
     int removed = 0;
     auto interior = [&](int v, int val) {
-      return verts[v].alive && !verts[v].boundary && fast_valence(v) == val;
+      return mesh.vertex_alive[v] && !particles[v].boundary && fast_valence(v) == val;
     };
-    for (std::size_t i = 0; i < verts.size(); ++i) {
+    for (std::size_t i = 0; i < particles.size(); ++i) {
       const int v = static_cast<int>(i);
       if (!interior(v, 7)) continue;
       bool done = false;
@@ -491,29 +438,29 @@ struct SpringNetwork::Impl {
     int dropped = 0;
     for (int round = 0; round < 8; ++round) {
       int this_round = 0;
-      for (std::size_t f = 0; f < faces.size(); ++f) {
-        if (!faces[f].alive || !turned_over(faces[f].v, surface)) continue;
-        const auto t = faces[f].v;
+      for (std::size_t f = 0; f < mesh.tri.size(); ++f) {
+        if (!mesh.face_alive[f] || !turned_over(mesh.tri[f], surface)) continue;
+        const auto t = mesh.tri[f];
         int border_edges = 0;
         for (int k = 0; k < 3; ++k)
           border_edges += edge_faces(t[k], t[(k + 1) % 3]).size() == 1 ? 1 : 0;
         if (border_edges == 0) {
           const auto fan_corner = std::find_if(t.begin(), t.end(), [&](int v) {
-            return verts[v].boundary && fan_rim_is_interior(v);
+            return particles[v].boundary && fan_rim_is_interior(v);
           });
           if (fan_corner != t.end()) {
-            const std::vector<int> fan = verts[*fan_corner].faces;
+            const std::vector<int> fan = mesh.vfaces[*fan_corner];
             drop_faces(fan);
             this_round += static_cast<int>(fan.size());
             continue;
           }
-          if (std::none_of(t.begin(), t.end(), [&](int v) { return verts[v].boundary; }))
+          if (std::none_of(t.begin(), t.end(), [&](int v) { return particles[v].boundary; }))
             continue;  // interior folds are not touched
         }
-        const std::size_t before = dead_faces;
+        const std::size_t before = dead_faces();
         drop_faces({static_cast<int>(f)});
         separate_wedges({t.begin(), t.end()});
-        this_round += static_cast<int>(dead_faces - before);
+        this_round += static_cast<int>(dead_faces() - before);
       }
       if (this_round == 0) break;
       dropped += this_round;
@@ -524,11 +471,11 @@ struct SpringNetwork::Impl {
   // Removes faces; their particles become border particles, or go if no face is left.
   void drop_faces(const std::vector<int>& doomed) {
     for (int f : doomed) {
-      const auto t = faces[f].v;
+      const auto t = mesh.tri[f];
       kill_face(f);
       for (int v : t) {
-        verts[v].boundary = true;
-        if (verts[v].faces.empty() && verts[v].alive) kill_vertex(v);
+        particles[v].boundary = true;
+        if (mesh.vfaces[v].empty() && mesh.vertex_alive[v]) kill_vertex(v);
       }
     }
   }
@@ -539,7 +486,7 @@ struct SpringNetwork::Impl {
     for (int w : neighbors(v)) {
       const bool border_edge = edge_faces(v, w).size() == 1;
       border_neighbours += border_edge ? 1 : 0;
-      if (!border_edge && verts[w].boundary) return false;
+      if (!border_edge && particles[w].boundary) return false;
     }
     return border_neighbours == 2;
   }
@@ -562,7 +509,7 @@ struct SpringNetwork::Impl {
     const std::vector<std::vector<int>> groups = particles_by_component();
     std::vector<int> alive;
     for (const auto& g : groups) alive.insert(alive.end(), g.begin(), g.end());
-    std::vector<Vector3d> force(verts.size());
+    std::vector<Vector3d> force(particles.size());
     for (int it = 0; it < iterations; ++it) {
       evaluate_all(surface);
       for (int a : alive) force[a].setZero();
@@ -577,11 +524,11 @@ struct SpringNetwork::Impl {
           }
       double largest = 0.0;
       for (int a : alive) {
-        if (verts[a].boundary || !verts[a].defined || verts[a].f.gradient.squaredNorm() == 0.0) {
+        if (particles[a].boundary || !particles[a].defined || particles[a].f.gradient.squaredNorm() == 0.0) {
           force[a].setZero();
           continue;
         }
-        const Vector3d n = verts[a].f.gradient.normalized();
+        const Vector3d n = particles[a].f.gradient.normalized();
         force[a] -= force[a].dot(n) * n;
         largest = std::max(largest, force[a].norm());
       }
@@ -591,20 +538,20 @@ struct SpringNetwork::Impl {
       for (int a : alive) {
         if (force[a].squaredNorm() == 0.0) continue;
         const auto q = project_to_surface(surface, P(a) + step * force[a], 8);
-        if (q && keeps_orientation(a, *q, verts[a].f.gradient)) verts[a].p = *q;
+        if (q && keeps_orientation(a, *q, particles[a].f.gradient)) mesh.pos[a] = *q;
       }
       delaunay_flips();
     }
   }
   // The alive particles grouped by connected component (through faces), in index order.
   std::vector<std::vector<int>> particles_by_component() const {
-    TriangleComponents components(verts.size());
-    for (const Face& f : faces)
-      if (f.alive) components.join(f.v);
-    std::vector<int> group_of(verts.size(), -1);
+    TriangleComponents components(particles.size());
+    for (std::size_t f = 0; f < mesh.tri.size(); ++f)
+      if (mesh.face_alive[f]) components.join(mesh.tri[f]);
+    std::vector<int> group_of(particles.size(), -1);
     std::vector<std::vector<int>> groups;
-    for (std::size_t i = 0; i < verts.size(); ++i) {
-      if (!verts[i].alive) continue;
+    for (std::size_t i = 0; i < particles.size(); ++i) {
+      if (!mesh.vertex_alive[i]) continue;
       int& g = group_of[components.root(static_cast<int>(i))];
       if (g < 0) g = static_cast<int>(groups.size()), groups.emplace_back();
       groups[g].push_back(static_cast<int>(i));
@@ -671,11 +618,7 @@ struct SpringNetwork::Impl {
     }
     return done;
   }
-  std::size_t alive_count() const {
-    std::size_t alive = 0;
-    for (const Vertex& v : verts) alive += v.alive ? 1 : 0;
-    return alive;
-  }
+  std::size_t alive_count() const { return static_cast<std::size_t>(mesh.vertex_count()); }
   double mean_stretch() const {
     double sum = 0.0;
     for (const auto& [k, sp] : springs)
@@ -690,7 +633,7 @@ struct SpringNetwork::Impl {
     std::vector<std::pair<Spring*, double>> cosines;
     cosines.reserve(springs.size());
     for (auto& [k, s] : springs) {
-      const Vertex &va = verts[edge_key_first(k)], &vb = verts[edge_key_second(k)];
+      const Particle &va = particles[edge_key_first(k)], &vb = particles[edge_key_second(k)];
       if (!va.defined || !vb.defined) continue;
       const double na = va.f.gradient.norm(), nb = vb.f.gradient.norm();
       if (!(na > 0.0 && nb > 0.0)) continue;
@@ -713,8 +656,8 @@ struct SpringNetwork::Impl {
     // particle takes the mean rest length of its springs, each spring the mean of its two
     // particles'.
     if (!o.adaptive_smoothing) return;
-    std::vector<double> vsum(verts.size(), 0.0);
-    std::vector<int> vcount(verts.size(), 0);
+    std::vector<double> vsum(particles.size(), 0.0);
+    std::vector<int> vcount(particles.size(), 0);
     for (const auto& [k, s] : springs) {
       if (s.special || s.topo) continue;
       for (int v : {edge_key_first(k), edge_key_second(k)}) vsum[v] += s.rest, ++vcount[v];
@@ -732,10 +675,11 @@ struct SpringNetwork::Impl {
     const double cos_eps = std::cos(o.gap_angle_deg * std::numbers::pi / 180.0);
     for (auto& [k, s] : springs) {
       if (s.topo) continue;
-      const Vertex &va = verts[edge_key_first(k)], &vb = verts[edge_key_second(k)];
+      const int a = edge_key_first(k), b = edge_key_second(k);
+      const Particle &va = particles[a], &vb = particles[b];
       if (!va.defined || !vb.defined) continue;
       const Vector3d ga = va.f.gradient, gb = vb.f.gradient;
-      const Vector3d r = va.p - vb.p;
+      const Vector3d r = P(a) - P(b);
       const double rl = r.norm();
       if (!(rl > 0.0)) continue;
       const bool diverging = ga.dot(gb) < 0.0;
@@ -743,7 +687,7 @@ struct SpringNetwork::Impl {
       if (ga.norm() > 0.0) cos_gamma = std::max(cos_gamma, std::abs(ga.dot(r)) / (ga.norm() * rl));
       if (gb.norm() > 0.0) cos_gamma = std::max(cos_gamma, std::abs(gb.dot(r)) / (gb.norm() * rl));
       if (!diverging && cos_gamma <= cos_eps) continue;
-      const auto fm = surface.evaluate(0.5 * (va.p + vb.p));
+      const auto fm = surface.evaluate(0.5 * (P(a) + P(b)));
       if (!fm || !(fm->value > 0.0)) continue;  // eq. (24): the midpoint lies outside
       s.topo = true;
       ++marked_now;
@@ -751,17 +695,18 @@ struct SpringNetwork::Impl {
     if (marked_now == 0 && !any_topo_) return 0;
     any_topo_ = true;
     // Step 2: the third edge of a triangle with exactly two marked edges becomes special.
-    for (const Face& f : faces) {
-      if (!f.alive) continue;
+    for (std::size_t f = 0; f < mesh.tri.size(); ++f) {
+      if (!mesh.face_alive[f]) continue;
+      const auto& t = mesh.tri[f];
       int n = 0, third = -1;
       for (int k = 0; k < 3; ++k) {
-        if (springs.at(edge_key(f.v[k], f.v[(k + 1) % 3])).topo)
+        if (springs.at(edge_key(t[k], t[(k + 1) % 3])).topo)
           ++n;
         else
           third = k;
       }
       if (n != 2) continue;
-      Spring& s = springs.at(edge_key(f.v[third], f.v[(third + 1) % 3]));
+      Spring& s = springs.at(edge_key(t[third], t[(third + 1) % 3]));
       s.special = true;
     }
     return marked_now;
@@ -796,7 +741,7 @@ struct SpringNetwork::Impl {
   std::vector<int> lost_steps_;
 
   int fast_valence(int v) const {
-    return static_cast<int>(verts[v].faces.size()) + (verts[v].boundary ? 1 : 0);
+    return static_cast<int>(mesh.vfaces[v].size()) + (particles[v].boundary ? 1 : 0);
   }
 
   // ---- Remeshing polish (an addition; docs/particles.md) ---------------------------------
@@ -804,16 +749,16 @@ struct SpringNetwork::Impl {
   // its triangles' centroids (one Lloyd-like step), within the tangent plane, and is then
   // Newton-projected onto F = 0.
   void smooth(const ImplicitSurface& surface, double weight) {
-    std::vector<Vector3d> next(verts.size());
-#pragma omp parallel for schedule(static) if (verts.size() > 20000)
-    for (std::size_t i = 0; i < verts.size(); ++i) {
-      const Vertex& v = verts[i];
-      next[i] = v.p;
-      if (!v.alive || v.boundary || v.faces.empty()) continue;
+    std::vector<Vector3d> next(particles.size());
+#pragma omp parallel for schedule(static) if (particles.size() > 20000)
+    for (std::size_t i = 0; i < particles.size(); ++i) {
+      const Vector3d& p = mesh.pos[i];
+      next[i] = p;
+      if (!mesh.vertex_alive[i] || particles[i].boundary || mesh.vfaces[i].empty()) continue;
       Vector3d c = Vector3d::Zero(), n = Vector3d::Zero();
       double area = 0.0;
-      for (int f : v.faces) {
-        const auto& t = faces[f].v;
+      for (int f : mesh.vfaces[i]) {
+        const auto& t = mesh.tri[f];
         const Vector3d nf = face_normal(t);
         const double a = nf.norm();
         c += a * (P(t[0]) + P(t[1]) + P(t[2])) / 3.0;
@@ -822,18 +767,18 @@ struct SpringNetwork::Impl {
       }
       if (!(area > 0.0)) continue;
       c /= area;
-      const auto f = surface.evaluate(v.p);
+      const auto f = surface.evaluate(p);
       if (f && f->gradient.squaredNorm() > 1e-20) n = f->gradient;
       n.normalize();
-      Vector3d d = c - v.p;
+      Vector3d d = c - p;
       d -= n.dot(d) * n;
-      Vector3d q = v.p + weight * d;
+      Vector3d q = p + weight * d;
       if (const auto pr = project_to_surface(surface, q, 4, 1e-10 * R());
           pr && (*pr - q).norm() < 0.5 * R())
         q = *pr;
       next[i] = q;
     }
-    for (std::size_t i = 0; i < verts.size(); ++i) verts[i].p = next[i];
+    for (std::size_t i = 0; i < particles.size(); ++i) mesh.pos[i] = next[i];
   }
 
   // A face turned against the surface: its normal points against the sum of its corners'
@@ -844,7 +789,7 @@ struct SpringNetwork::Impl {
   }
   int turned_faces_around(int v) const {
     int n = 0;
-    for (int f : verts[v].faces) n += turned_at_corners(faces[f].v) ? 1 : 0;
+    for (int f : mesh.vfaces[v]) n += turned_at_corners(mesh.tri[f]) ? 1 : 0;
     return n;
   }
 
@@ -857,10 +802,10 @@ struct SpringNetwork::Impl {
     int moved = 0;
     for (int round = 0; round < 4; ++round) {
       std::vector<int> corners;
-      for (const Face& f : faces)
-        if (f.alive && turned_at_corners(f.v))
-          for (int v : f.v)
-            if (!verts[v].boundary) corners.push_back(v);
+      for (std::size_t f = 0; f < mesh.tri.size(); ++f)
+        if (mesh.face_alive[f] && turned_at_corners(mesh.tri[f]))
+          for (int v : mesh.tri[f])
+            if (!particles[v].boundary) corners.push_back(v);
       if (corners.empty()) break;
       std::sort(corners.begin(), corners.end());
       corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
@@ -875,13 +820,13 @@ struct SpringNetwork::Impl {
             q && (*q - c).norm() < 0.5 * R())
           c = *q;
         const int before = turned_faces_around(v);
-        const Vector3d old = verts[v].p;
-        verts[v].p = c;
+        const Vector3d old = mesh.pos[v];
+        mesh.pos[v] = c;
         if (turned_faces_around(v) < before) {
           ++moved_now;
-          if (calming_) ++verts[v].untangled;
+          if (calming_) ++particles[v].untangled;
         } else {
-          verts[v].p = old;
+          mesh.pos[v] = old;
         }
       }
       moved += moved_now;
@@ -894,8 +839,8 @@ struct SpringNetwork::Impl {
   bool collapse_keeps_short(int a, int b, double limit) const {
     const Vector3d m = 0.5 * (P(a) + P(b));
     for (int v : {a, b})
-      for (int f : verts[v].faces)
-        for (int x : faces[f].v)
+      for (int f : mesh.vfaces[v])
+        for (int x : mesh.tri[f])
           if (x != a && x != b && (P(x) - m).norm() > limit) return false;
     return true;
   }
@@ -944,11 +889,11 @@ struct SpringNetwork::Impl {
       const std::uint64_t k = edge_key(a, b);
       if (const auto it = qualifies.find(k); it != qualifies.end()) return it->second;
       bool q = false;
-      const Vertex &va = verts[a], &vb = verts[b];
+      const Particle &va = particles[a], &vb = particles[b];
       if (va.defined && vb.defined) {
         const double na = va.f.gradient.norm(), nb = vb.f.gradient.norm();
         if (na > 0.0 && nb > 0.0 && va.f.gradient.dot(vb.f.gradient) / (na * nb) < o.epsilon2) {
-          const auto fm = surface.evaluate(0.5 * (va.p + vb.p));
+          const auto fm = surface.evaluate(0.5 * (P(a) + P(b)));
           q = fm && fm->value > o.epsilon1 * R() * fm->gradient.norm() && fm->value > 0.0;
         }
       }
@@ -957,9 +902,9 @@ struct SpringNetwork::Impl {
     };
     // Candidates: triangles with exactly two qualifying edges (eq. 25.1-3).
     std::unordered_map<int, std::array<int, 3>> cand;  // face -> qualifying flags
-    for (std::size_t f = 0; f < faces.size(); ++f) {
-      if (!faces[f].alive) continue;
-      const auto& t = faces[f].v;
+    for (std::size_t f = 0; f < mesh.tri.size(); ++f) {
+      if (!mesh.face_alive[f]) continue;
+      const auto& t = mesh.tri[f];
       std::array<int, 3> q{};
       int n = 0;
       for (int k = 0; k < 3; ++k) n += (q[k] = qual(t[k], t[(k + 1) % 3]) ? 1 : 0);
@@ -976,7 +921,7 @@ struct SpringNetwork::Impl {
     std::unordered_set<int> visited;
     int cuts = 0;
     for (int start : order) {
-      if (visited.count(start) || !faces[start].alive) continue;
+      if (visited.count(start) || !mesh.face_alive[start]) continue;
       // Walk the dual cycle through qualifying shared edges (eq. 25.1, closed by 25.4).
       std::vector<int> ring;
       bool closed = false, broken = false;
@@ -984,7 +929,7 @@ struct SpringNetwork::Impl {
       while (true) {
         visited.insert(cur);
         ring.push_back(cur);
-        const auto& t = faces[cur].v;
+        const auto& t = mesh.tri[cur];
         const auto& q = cand.at(cur);
         std::vector<int> nbr;
         for (int k = 0; k < 3; ++k) {
@@ -1019,7 +964,7 @@ struct SpringNetwork::Impl {
       }
       if (broken || !closed || ring.size() < 3) continue;
       bool alive = true;
-      for (int f : ring) alive = alive && faces[f].alive;
+      for (int f : ring) alive = alive && mesh.face_alive[f];
       if (!alive) continue;
       if (cut_ring(ring, cand, surface)) {
         ++cuts;
@@ -1031,8 +976,8 @@ struct SpringNetwork::Impl {
       // the holes from the border half-edges (pinched vertices widened, decision 27).
       for (int f : ring) kill_face(f);
       for (int f : ring)
-        for (int v : faces[f].v)
-          if (verts[v].alive && verts[v].faces.empty()) kill_vertex(v);
+        for (int v : mesh.tri[f])
+          if (mesh.vertex_alive[v] && mesh.vfaces[v].empty()) kill_vertex(v);
       close_new_holes(surface);
       ++cuts;
     }
@@ -1051,11 +996,11 @@ struct SpringNetwork::Impl {
     // edges join end points with gradients >= 90 deg apart through the outside), so remove
     // them all and close the holes with fans.
     bool all_spanning = true;
-    for (const auto& [f, q] : cand) all_spanning = all_spanning && faces[f].alive;
+    for (const auto& [f, q] : cand) all_spanning = all_spanning && mesh.face_alive[f];
     if (!all_spanning) return 0;
     for (int f : order) kill_face(f);
-    for (std::size_t i = 0; i < verts.size(); ++i)
-      if (verts[i].alive && verts[i].faces.empty()) kill_vertex(static_cast<int>(i));
+    for (std::size_t i = 0; i < particles.size(); ++i)
+      if (mesh.vertex_alive[i] && mesh.vfaces[i].empty()) kill_vertex(static_cast<int>(i));
     close_new_holes(surface);
     clear_gap_marks();
     return 1;
@@ -1087,28 +1032,29 @@ struct SpringNetwork::Impl {
       next.clear();
       // Border half-edges: a face has x -> y and no face has y -> x.
       std::unordered_set<std::uint64_t> half;
-      for (const Face& f : faces)
-        if (f.alive)
-          for (int k = 0; k < 3; ++k) half.insert(directed_edge_key(f.v[k], f.v[(k + 1) % 3]));
+      for (std::size_t f = 0; f < mesh.tri.size(); ++f)
+        if (mesh.face_alive[f])
+          for (int k = 0; k < 3; ++k)
+            half.insert(directed_edge_key(mesh.tri[f][k], mesh.tri[f][(k + 1) % 3]));
       for (std::uint64_t h : half) {
         const int x = edge_key_first(h), y = edge_key_second(h);
         if (half.count(directed_edge_key(y, x))) continue;
-        if (verts[x].boundary && verts[y].boundary) continue;  // an original border (scan)
+        if (particles[x].boundary && particles[y].boundary) continue;  // an original border (scan)
         next[x].push_back(y);
       }
       std::vector<int> pinched;
       for (const auto& [x, ys] : next)
-        if (ys.size() > 1 && !verts[x].boundary) pinched.push_back(x);
+        if (ys.size() > 1 && !particles[x].boundary) pinched.push_back(x);
       if (pinched.empty()) break;
       std::sort(pinched.begin(), pinched.end());
       for (int v : pinched) {
-        const std::vector<int> around = verts[v].faces;
+        const std::vector<int> around = mesh.vfaces[v];
         for (int f : around)
-          if (faces[f].alive) kill_face(f);
+          if (mesh.face_alive[f]) kill_face(f);
         kill_vertex(v);
       }
-      for (std::size_t i = 0; i < verts.size(); ++i)
-        if (verts[i].alive && verts[i].faces.empty()) kill_vertex(static_cast<int>(i));
+      for (std::size_t i = 0; i < particles.size(); ++i)
+        if (mesh.vertex_alive[i] && mesh.vfaces[i].empty()) kill_vertex(static_cast<int>(i));
     }
     std::vector<int> starts;
     for (const auto& [x, ys] : next) starts.push_back(x);
@@ -1140,8 +1086,8 @@ struct SpringNetwork::Impl {
       for (std::size_t k = 0; k < loop.size(); ++k)
         add_face(loop[(k + 1) % loop.size()], loop[k], centre);
     }
-    for (std::size_t i = 0; i < verts.size(); ++i)
-      if (verts[i].alive && verts[i].faces.empty()) kill_vertex(static_cast<int>(i));
+    for (std::size_t i = 0; i < particles.size(); ++i)
+      if (mesh.vertex_alive[i] && mesh.vfaces[i].empty()) kill_vertex(static_cast<int>(i));
     rebuild_springs();
   }
 
@@ -1153,16 +1099,16 @@ struct SpringNetwork::Impl {
   int remove_lost_particles(const ImplicitSurface& surface) {
     // Patience as for the ring (§4.4 Step 3 usually removes such particles with its ring):
     // only a particle that stays lost is removed here.
-    const std::vector<int> lost = lost_for_longer_than_patience([&](const Vertex& v) {
+    const std::vector<int> lost = lost_for_longer_than_patience([&](const Particle& v) {
       if (v.boundary || !v.defined) return false;
       const double g = v.f.gradient.norm();
       return g < 1e-10 ? v.f.value > 0.0 : std::abs(v.f.value) > R() * g;
     });
     if (lost.empty()) return 0;
     for (int v : lost) {
-      const std::vector<int> around = verts[v].faces;
+      const std::vector<int> around = mesh.vfaces[v];
       for (int f : around)
-        if (faces[f].alive) kill_face(f);
+        if (mesh.face_alive[f]) kill_face(f);
     }
     for (int v : lost) kill_vertex(v);
     close_new_holes(surface);
@@ -1178,17 +1124,17 @@ struct SpringNetwork::Impl {
   // triangles, and the hole stays open: it is a border of the data, not of the object.
   int open_holes_at_lost_particles() {
     const std::vector<int> lost = lost_for_longer_than_patience(
-        [&](const Vertex& v) { return !v.defined || farther_than_R(v.f); });
+        [&](const Particle& v) { return !v.defined || farther_than_R(v.f); });
     if (lost.empty()) return 0;
     std::vector<int> doomed;
-    for (int v : lost) doomed.insert(doomed.end(), verts[v].faces.begin(), verts[v].faces.end());
+    for (int v : lost) doomed.insert(doomed.end(), mesh.vfaces[v].begin(), mesh.vfaces[v].end());
     std::sort(doomed.begin(), doomed.end());
     doomed.erase(std::unique(doomed.begin(), doomed.end()), doomed.end());
     std::vector<int> rim;
-    for (int f : doomed) rim.insert(rim.end(), faces[f].v.begin(), faces[f].v.end());
+    for (int f : doomed) rim.insert(rim.end(), mesh.tri[f].begin(), mesh.tri[f].end());
     drop_faces(doomed);
     for (int v : lost)
-      if (verts[v].alive) kill_vertex(v);
+      if (mesh.vertex_alive[v]) kill_vertex(v);
     separate_wedges(std::move(rim));
     rebuild_springs();
     return static_cast<int>(lost.size());
@@ -1198,10 +1144,10 @@ struct SpringNetwork::Impl {
   template <class Lost>
   std::vector<int> lost_for_longer_than_patience(Lost&& lost_now) {
     std::vector<int> lost;
-    lost_steps_.resize(verts.size(), 0);
-    for (std::size_t i = 0; i < verts.size(); ++i) {
-      if (!verts[i].alive) continue;
-      lost_steps_[i] = lost_now(verts[i]) ? lost_steps_[i] + 1 : 0;
+    lost_steps_.resize(particles.size(), 0);
+    for (std::size_t i = 0; i < particles.size(); ++i) {
+      if (!mesh.vertex_alive[i]) continue;
+      lost_steps_[i] = lost_now(particles[i]) ? lost_steps_[i] + 1 : 0;
       if (lost_steps_[i] > o.ring_patience) lost.push_back(static_cast<int>(i));
     }
     return lost;
@@ -1218,24 +1164,24 @@ struct SpringNetwork::Impl {
     while (!touched.empty()) {
       const int v = touched.back();
       touched.pop_back();
-      if (!verts[v].alive || verts[v].faces.size() < 2) continue;
+      if (!mesh.vertex_alive[v] || mesh.vfaces[v].size() < 2) continue;
       const std::vector<int> doomed = faces_off_largest_wedge(v);
-      for (int f : doomed) touched.insert(touched.end(), faces[f].v.begin(), faces[f].v.end());
+      for (int f : doomed) touched.insert(touched.end(), mesh.tri[f].begin(), mesh.tri[f].end());
       drop_faces(doomed);
     }
   }
   // Every particle keeps only its largest wedge of faces.
   void make_vertex_manifold() {
-    const std::size_t before = dead_faces;
+    const std::size_t before = dead_faces();
     std::vector<int> all;
-    for (std::size_t i = 0; i < verts.size(); ++i)
-      if (verts[i].alive) all.push_back(static_cast<int>(i));
+    for (std::size_t i = 0; i < particles.size(); ++i)
+      if (mesh.vertex_alive[i]) all.push_back(static_cast<int>(i));
     separate_wedges(std::move(all));
-    if (dead_faces != before) rebuild_springs();
+    if (dead_faces() != before) rebuild_springs();
   }
   // The faces round v that are not in its largest wedge (faces joined across edges at v).
   std::vector<int> faces_off_largest_wedge(int v) const {
-    const std::vector<int>& star = verts[v].faces;
+    const std::vector<int>& star = mesh.vfaces[v];
     std::vector<int> wedge(star.size(), -1);
     std::vector<int> size;
     for (std::size_t s0 = 0; s0 < star.size(); ++s0) {
@@ -1261,9 +1207,9 @@ struct SpringNetwork::Impl {
   }
   // True if faces f and g share an edge that ends at v.
   bool share_edge_at(int f, int g, int v) const {
-    for (int a : faces[f].v)
+    for (int a : mesh.tri[f])
       if (a != v)
-        for (int b : faces[g].v)
+        for (int b : mesh.tri[g])
           if (a == b) return true;
     return false;
   }
@@ -1278,7 +1224,7 @@ struct SpringNetwork::Impl {
     };
     std::vector<Border> border;
     for (int f : ring) {
-      const auto& t = faces[f].v;
+      const auto& t = mesh.tri[f];
       const auto& q = cand.at(f);
       for (int k = 0; k < 3; ++k) {
         if (q[k]) continue;
@@ -1326,7 +1272,7 @@ struct SpringNetwork::Impl {
     // each hole with a fan (Bild 4d).
     std::unordered_set<int> ring_vertices;
     for (int f : ring)
-      for (int v : faces[f].v) ring_vertices.insert(v);
+      for (int v : mesh.tri[f]) ring_vertices.insert(v);
     for (int f : ring) kill_face(f);
     std::array<int, 2> centre{};
     for (int l = 0; l < 2; ++l) {
@@ -1338,7 +1284,7 @@ struct SpringNetwork::Impl {
     for (std::size_t e = 0; e < border.size(); ++e)
       add_face(border[e].y, border[e].x, centre[loop_of[e]]);
     for (int v : ring_vertices)
-      if (verts[v].alive && verts[v].faces.empty()) kill_vertex(v);
+      if (mesh.vertex_alive[v] && mesh.vfaces[v].empty()) kill_vertex(v);
     return true;
   }
 
@@ -1358,7 +1304,7 @@ struct SpringNetwork::Impl {
   Vector3d driving_force(std::size_t i, const std::vector<Vector3d>& force,
                          const std::unordered_map<int, Vector3d>& border_dir) const;
   void keep_triangles_unturned(int i, const Vector3d& g, double g2, Vector3d& move) const;
-  static void damp_reversing_move(Vertex& v, Vector3d& move);
+  static void damp_reversing_move(Particle& v, Vector3d& move);
   StepCandidates step_candidates() const;
   void collapse_short_special_springs(const std::vector<std::uint64_t>& special_short,
                                       StepReport& rep);
@@ -1390,11 +1336,11 @@ SpringNetwork::SpringNetwork(const Mesh& start, const ParticleOptions& options)
   for (const auto& [k, n] : count) {
     const int a = edge_key_first(k), b = edge_key_second(k);
     if (n > 1) throw InvalidInputError("particles: start mesh is not consistently oriented");
-    if (!count.count(directed_edge_key(b, a))) m.verts[a].boundary = m.verts[b].boundary = true;
+    if (!count.count(directed_edge_key(b, a))) m.particles[a].boundary = m.particles[b].boundary = true;
   }
-  for (auto& v : m.verts) {
-    if (v.faces.empty()) v.alive = false, ++m.dead_verts;
-    m.has_border_ = m.has_border_ || (v.alive && v.boundary);
+  for (std::size_t v = 0; v < m.particles.size(); ++v) {
+    if (m.mesh.vfaces[v].empty()) m.kill_vertex(static_cast<int>(v));
+    m.has_border_ = m.has_border_ || (m.mesh.vertex_alive[v] && m.particles[v].boundary);
   }
   m.rebuild_springs();
 }
@@ -1408,7 +1354,8 @@ SpringNetwork& SpringNetwork::operator=(SpringNetwork&&) noexcept = default;
 // Counts the step, compacts storage that is more than half dead and evaluates F everywhere.
 void SpringNetwork::Impl::start_step(const ImplicitSurface& surface) {
   ++iter;
-  if (dead_faces > faces.size() / 2 || dead_verts > verts.size() / 2) compact();
+  const std::size_t dead_vertices = mesh.pos.size() - static_cast<std::size_t>(mesh.vertex_count());
+  if (dead_faces() > mesh.tri.size() / 2 || dead_vertices > mesh.pos.size() / 2) compact();
   evaluate_all(surface);
 }
 
@@ -1416,8 +1363,8 @@ void SpringNetwork::Impl::start_step(const ImplicitSurface& surface) {
 // eq. (12) (stiffness ~ rho * valence), so dt = factor / (rho * max valence).
 double SpringNetwork::Impl::stable_time_step() const {
   std::size_t max_valence = 6;
-  for (const Vertex& v : verts)
-    if (v.alive) max_valence = std::max(max_valence, v.faces.size());
+  for (std::size_t v = 0; v < mesh.pos.size(); ++v)
+    if (mesh.vertex_alive[v]) max_valence = std::max(max_valence, mesh.vfaces[v].size());
   return o.time_step_factor / (o.rho * static_cast<double>(max_valence));
 }
 
@@ -1433,7 +1380,7 @@ void SpringNetwork::Impl::mark_topology_change(const ImplicitSurface& surface, S
 
 // Eq. (12)-(13): P_i = sum_j r_ij rho (R_e - |r_ij|) / R_e over the one-ring.
 std::vector<Vector3d> SpringNetwork::Impl::spring_forces() const {
-  std::vector<Vector3d> force(verts.size(), Vector3d::Zero());
+  std::vector<Vector3d> force(particles.size(), Vector3d::Zero());
   for (const auto& [k, s] : springs) {
     const int a = edge_key_first(k), b = edge_key_second(k);
     const Vector3d r = P(a) - P(b);
@@ -1454,9 +1401,8 @@ std::vector<Vector3d> SpringNetwork::Impl::spring_forces() const {
 // component along the chord of the two border neighbours (decision 19).
 std::unordered_map<int, Vector3d> SpringNetwork::Impl::border_slide_directions() const {
   std::unordered_map<int, Vector3d> border_dir;
-  for (std::size_t i = 0; i < verts.size(); ++i) {
-    const Vertex& v = verts[i];
-    if (!v.alive || !v.boundary) continue;
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    if (!mesh.vertex_alive[i] || !particles[i].boundary) continue;
     std::vector<int> ends;
     for (int x : neighbors(static_cast<int>(i)))
       if (edge_faces(static_cast<int>(i), x).size() == 1) ends.push_back(x);
@@ -1472,11 +1418,11 @@ void SpringNetwork::Impl::move_particles(const std::vector<Vector3d>& force,
                                          const std::unordered_map<int, Vector3d>& border_dir,
                                          double dt, double surface_time_step, StepReport& rep) {
   const double cap = o.max_step * R();
-  for (std::size_t i = 0; i < verts.size(); ++i) {
-    Vertex& v = verts[i];
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    Particle& v = particles[i];
     // Gap: a particle where F is undefined waits (in scan mode, for ring_patience steps;
     // then it is removed, decision 43).
-    if (!v.alive || !v.defined) continue;
+    if (!mesh.vertex_alive[i] || !v.defined) continue;
     const Vector3d g = v.f.gradient;
     const double g2 = g.squaredNorm();
     const Vector3d p_target = driving_force(i, force, border_dir);
@@ -1491,7 +1437,7 @@ void SpringNetwork::Impl::move_particles(const std::vector<Vector3d>& force,
     if (len > cap) move *= cap / len;
     keep_triangles_unturned(static_cast<int>(i), g, g2, move);
     if (calming_) damp_reversing_move(v, move);
-    v.p += move;
+    mesh.pos[i] += move;
   }
 }
 
@@ -1500,7 +1446,7 @@ void SpringNetwork::Impl::move_particles(const std::vector<Vector3d>& force,
 Vector3d SpringNetwork::Impl::driving_force(
     std::size_t i, const std::vector<Vector3d>& force,
     const std::unordered_map<int, Vector3d>& border_dir) const {
-  const Vertex& v = verts[i];
+  const Particle& v = particles[i];
   // Decision 44: in calming, a particle the untangling had to move back again and again
   // (a rough surface whose gradient turns within a spring's length: the springs push it
   // into a turned position, the untangling takes it out) keeps only the constraint part.
@@ -1534,7 +1480,7 @@ void SpringNetwork::Impl::keep_triangles_unturned(int i, const Vector3d& g, doub
 
 // Decision 44: a move that turns back on the previous one (a 2-cycle of the Newton step
 // between two bumps of a rough surface) is damped, more each time it happens again.
-void SpringNetwork::Impl::damp_reversing_move(Vertex& v, Vector3d& move) {
+void SpringNetwork::Impl::damp_reversing_move(Particle& v, Vector3d& move) {
   const bool reverses = move.dot(v.last_move) < -0.5 * move.norm() * v.last_move.norm();
   v.damping = reverses ? std::max(v.damping * 0.5, 1.0 / 64) : std::min(1.0, v.damping * 1.25);
   v.last_move = move;
@@ -1564,7 +1510,7 @@ void SpringNetwork::Impl::collapse_short_special_springs(
     const auto it = springs.find(k);
     if (it == springs.end() || !it->second.special) continue;
     const int a = edge_key_first(k), b = edge_key_second(k);
-    if (!verts[a].alive || !verts[b].alive) continue;
+    if (!mesh.vertex_alive[a] || !mesh.vertex_alive[b]) continue;
     if (length(a, b) < o.special_min_length * R() && try_collapse(a, b)) ++rep.special_collapses;
   }
 }
@@ -1602,9 +1548,9 @@ void SpringNetwork::Impl::flip_unmarked_springs(StepReport& rep) {
 // Valence-3 particles cannot be repaired by flips (a flip never lowers the valence of a
 // vertex below 4 here); remove them by collapsing their shortest spring.
 void SpringNetwork::Impl::remove_valence_three_particles(StepReport& rep) {
-  for (std::size_t i = 0; i < verts.size(); ++i) {
+  for (std::size_t i = 0; i < particles.size(); ++i) {
     const int v = static_cast<int>(i);
-    if (!verts[i].alive || verts[i].boundary || verts[i].faces.size() != 3) continue;
+    if (!mesh.vertex_alive[i] || particles[i].boundary || mesh.vfaces[i].size() != 3) continue;
     auto ring = neighbors(v);
     std::sort(ring.begin(), ring.end(), [&](int x, int y) { return length(v, x) < length(v, y); });
     for (int x : ring) {
@@ -1694,7 +1640,7 @@ int SpringNetwork::relax(const ImplicitSurface& surface, std::size_t target_vert
   const bool topology_change = m.o.topology_change;
   const bool flips = m.o.flips;
   m.o.topology_change = false;
-  for (Vertex& v : m.verts) v.reset_calming();
+  for (Particle& v : m.particles) v.reset_calming();
   m.lost_steps_.clear();
   // Isotropic remeshing rounds first (an addition, docs/particles.md): they bring the start
   // mesh near the spring equilibrium in a few sweeps, which explicit Euler needs hundreds of
@@ -1708,8 +1654,8 @@ int SpringNetwork::relax(const ImplicitSurface& surface, std::size_t target_vert
   std::vector<Vector3d> window;
   for (; n < m.o.max_iterations; ++n) {
     if (quiet == 0) {
-      window.resize(m.verts.size());
-      for (std::size_t i = 0; i < m.verts.size(); ++i) window[i] = m.verts[i].p;
+      window.resize(m.particles.size());
+      for (std::size_t i = 0; i < m.particles.size(); ++i) window[i] = m.mesh.pos[i];
     }
     // Freeze the flips after `flip_freeze` steps (decision 34): on scans the flips and the
     // collapses of Rule 1 kept undoing each other somewhere (never converged in 3,000 steps).
@@ -1722,14 +1668,14 @@ int SpringNetwork::relax(const ImplicitSurface& surface, std::size_t target_vert
     if (m.o.flip_freeze > 0 && n == 2 * m.o.flip_freeze) m.rules_frozen_ = m.has_border_;
     if (m.o.progress && n % 10 == 0) m.o.progress(n, m.o.max_iterations);
     const StepReport r = step(surface);
-    if (r.changed() || m.verts.size() != window.size()) {
+    if (r.changed() || m.particles.size() != window.size()) {
       quiet = 0;
       continue;
     }
     if (++quiet < 10) continue;
     double moved = 0.0;
-    for (std::size_t i = 0; i < m.verts.size(); ++i)
-      if (m.verts[i].alive) moved = std::max(moved, (m.verts[i].p - window[i]).norm());
+    for (std::size_t i = 0; i < m.particles.size(); ++i)
+      if (m.mesh.vertex_alive[i]) moved = std::max(moved, (m.mesh.pos[i] - window[i]).norm());
     if (moved >= 10.0 * m.o.convergence_tolerance * m.o.edge_length) {
       quiet = 0;
       continue;
@@ -1782,13 +1728,13 @@ void SpringNetwork::spread_evenly(const ImplicitSurface& surface, int iterations
 
 void SpringNetwork::project(const ImplicitSurface& surface) {
   Impl& m = *impl_;
-#pragma omp parallel for schedule(static) if (m.verts.size() > 20000)
-  for (std::size_t i = 0; i < m.verts.size(); ++i) {
-    Vertex& v = m.verts[i];
-    if (!v.alive) continue;
-    if (const auto q = project_to_surface(surface, v.p, 20, 1e-13);
-        q && (*q - v.p).norm() < m.o.edge_length)
-      v.p = *q;
+#pragma omp parallel for schedule(static) if (m.particles.size() > 20000)
+  for (std::size_t i = 0; i < m.particles.size(); ++i) {
+    if (!m.mesh.vertex_alive[i]) continue;
+    Vector3d& p = m.mesh.pos[i];
+    if (const auto q = project_to_surface(surface, p, 20, 1e-13);
+        q && (*q - p).norm() < m.o.edge_length)
+      p = *q;
   }
   for (auto& [k, s] : m.springs) s.old_length = m.length(edge_key_first(k), edge_key_second(k));
 }
@@ -1796,29 +1742,28 @@ void SpringNetwork::project(const ImplicitSurface& surface) {
 Mesh SpringNetwork::mesh() const {
   const Impl& m = *impl_;
   Mesh out;
-  std::vector<int> map(m.verts.size(), -1);
-  for (std::size_t i = 0; i < m.verts.size(); ++i)
-    if (m.verts[i].alive) {
+  std::vector<int> map(m.particles.size(), -1);
+  for (std::size_t i = 0; i < m.particles.size(); ++i)
+    if (m.mesh.vertex_alive[i]) {
       map[i] = static_cast<int>(out.positions.size());
-      out.positions.push_back(m.verts[i].p);
+      out.positions.push_back(m.mesh.pos[i]);
     }
-  for (const Face& f : m.faces)
-    if (f.alive) out.triangles.push_back({map[f.v[0]], map[f.v[1]], map[f.v[2]]});
+  for (std::size_t f = 0; f < m.mesh.tri.size(); ++f) {
+    if (!m.mesh.face_alive[f]) continue;
+    const auto& t = m.mesh.tri[f];
+    out.triangles.push_back({map[t[0]], map[t[1]], map[t[2]]});
+  }
   return out;
 }
 
 std::vector<std::uint64_t> SpringNetwork::vertex_ids() const {
   std::vector<std::uint64_t> ids;
-  for (const Vertex& v : impl_->verts)
-    if (v.alive) ids.push_back(v.id);
+  for (std::size_t i = 0; i < impl_->particles.size(); ++i)
+    if (impl_->mesh.vertex_alive[i]) ids.push_back(impl_->particles[i].id);
   return ids;
 }
 
-std::size_t SpringNetwork::vertex_count() const {
-  std::size_t n = 0;
-  for (const Vertex& v : impl_->verts) n += v.alive ? 1 : 0;
-  return n;
-}
+std::size_t SpringNetwork::vertex_count() const { return impl_->alive_count(); }
 
 int SpringNetwork::iteration() const { return impl_->iter; }
 bool SpringNetwork::converged() const { return impl_->converged; }
