@@ -20,7 +20,7 @@
 #include <tuple>
 #include <vector>
 
-#include "cell_grid.h"
+#include "../kernel/point_grid.h"
 #include "scanmesh/core/errors.h"
 #include "scanmesh/meshing/mesh_check.h"
 
@@ -28,7 +28,7 @@ namespace scanmesh {
 
 using Eigen::Vector2d;
 using Eigen::Vector3d;
-using fans_detail::CellGrid;
+using kernel::PointGrid;
 
 namespace {
 
@@ -105,7 +105,7 @@ Vector3d pca_normal(const std::vector<Vector3d>& pts, int c,
 struct Context {
   const std::vector<Vector3d>& pts;
   const FanOptions& opt;
-  CellGrid grid;
+  PointGrid grid;
   double eps_len = 0;
   double d_max = 0;
   std::vector<Vector3d> normals;
@@ -119,7 +119,7 @@ struct Context {
 
 double cell_edge_formula(const std::vector<Vector3d>& pts, int k) {
   // The box without far outliers: one stray point must not make the cells enormous.
-  const auto [lo, hi] = fans_detail::robust_box(pts);
+  const auto [lo, hi] = kernel::robust_box(pts);
   const Vector3d d = hi - lo;
   // Scaled by the longest side, so that a box spanning 1e200 does not overflow the area to
   // infinity (an infinite cell edge made the cell index of a far point NaN).
@@ -1337,7 +1337,7 @@ void orient_components_by_normals(std::vector<std::array<int, 3>>& faces,
 // is refused instead of meshed for minutes. Exact copies never get here (meshed once).
 constexpr std::size_t kMaxPointsPerCell = 4096;
 
-void check_crowding(const fans_detail::CellGrid& grid, int n) {
+void check_crowding(const PointGrid& grid, int n) {
   const std::size_t fullest = grid.fullest_cell();
   const std::size_t mean =
       static_cast<std::size_t>(n) / std::max<std::size_t>(1, grid.occupied_cells());
@@ -1364,13 +1364,13 @@ void check_input(const std::vector<Vector3d>& points, const FanOptions& options)
 // Points reordered by grid cell, so that neighbours are close in memory (the fans touch the
 // positions and normals of all neighbours; in input order that is a cache miss each).
 std::vector<int> cell_order(const std::vector<Vector3d>& points, int k) {
-  const CellGrid g(points, cell_edge_formula(points, k));
+  const PointGrid g(points, cell_edge_formula(points, k));
   return g.order();
 }
 
 // Whether two points share a position. Copies fall into one grid cell, and cells hold a few
 // points, so comparing within cells (in parallel) is far cheaper than sorting the cloud.
-bool has_duplicates(const CellGrid& grid, const std::vector<Vector3d>& points, int threads) {
+bool has_duplicates(const PointGrid& grid, const std::vector<Vector3d>& points, int threads) {
   const auto cells = static_cast<std::ptrdiff_t>(grid.cells());
   const auto& order = grid.order();
   int found = 0;
@@ -1445,7 +1445,7 @@ FanResult build_fans_distinct(const std::vector<Vector3d>& input, const FanOptio
   Context ctx(points, options, cell_edge_formula(points, options.k));
   st.cell_edge = ctx.grid.cell_edge();
   check_crowding(ctx.grid, n);
-  const auto [lo, hi] = fans_detail::robust_box(points);
+  const auto [lo, hi] = kernel::robust_box(points);
   ctx.eps_len = 1e-9 * (hi - lo).norm();  // Gap (4b): "falls on c"
   ctx.d_max = options.dmax_factor * st.cell_edge;
   std::vector<Eigen::Vector3f> given_sorted;
@@ -1614,7 +1614,7 @@ FanResult build_fans_impl(const std::vector<Vector3d>& input, const FanOptions& 
   // Most clouds have no copies: their cell order is found once and serves the fans too. A
   // cloud whose copies make its box degenerate (20,000 copies of one point beside a sheet) has
   // no usable cell size until the copies are gone: it goes the sorting way below.
-  std::optional<CellGrid> grid;
+  std::optional<PointGrid> grid;
   try {
     grid.emplace(input, cell_edge_formula(input, options.k));
   } catch (const InvalidInputError&) {

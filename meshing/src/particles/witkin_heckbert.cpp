@@ -5,51 +5,13 @@
 
 #include <cmath>
 #include <random>
-#include <unordered_map>
 
+#include "../kernel/point_grid.h"
 #include "scanmesh/core/errors.h"
 
 namespace scanmesh::particles {
 
 using Eigen::Vector3d;
-
-namespace {
-
-// Uniform hash grid for the neighbour queries (energies beyond 3 sigma are negligible).
-class HashGrid {
- public:
-  HashGrid(const std::vector<Vector3d>& pts, double cell) : cell_(cell) {
-    for (std::size_t i = 0; i < pts.size(); ++i) cells_[key(pts[i])].push_back(static_cast<int>(i));
-  }
-  template <typename Fn>
-  void for_near(const Vector3d& p, Fn&& fn) const {
-    const Eigen::Vector3i c = coord(p);
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const auto it = cells_.find(pack(c + Eigen::Vector3i(dx, dy, dz)));
-          if (it == cells_.end()) continue;
-          for (int j : it->second) fn(j);
-        }
-  }
-
- private:
-  Eigen::Vector3i coord(const Vector3d& p) const {
-    return Eigen::Vector3i(static_cast<int>(std::floor(p.x() / cell_)),
-                           static_cast<int>(std::floor(p.y() / cell_)),
-                           static_cast<int>(std::floor(p.z() / cell_)));
-  }
-  static std::uint64_t pack(const Eigen::Vector3i& c) {
-    return (static_cast<std::uint64_t>(c.x() & 0x1fffff) << 42) |
-           (static_cast<std::uint64_t>(c.y() & 0x1fffff) << 21) |
-           static_cast<std::uint64_t>(c.z() & 0x1fffff);
-  }
-  std::uint64_t key(const Vector3d& p) const { return pack(coord(p)); }
-  double cell_;
-  std::unordered_map<std::uint64_t, std::vector<int>> cells_;
-};
-
-}  // namespace
 
 SampleResult witkin_heckbert_sample(const ImplicitSurface& surface, const SamplerOptions& o) {
   if (!(o.sigma > 0.0) || !(o.alpha > 0.0) || !(o.time_step > 0.0) || o.iterations < 0 ||
@@ -77,7 +39,9 @@ SampleResult witkin_heckbert_sample(const ImplicitSurface& surface, const Sample
   for (int it = 0; it < o.iterations; ++it) {
     double smax = 0.0;
     for (double s : sig) smax = std::max(smax, s);
-    const HashGrid grid(pts, 3.0 * smax);
+    // Energies beyond 3 sigma are negligible (exp(-4.5) of the nearest).
+    const double reach = 3.0 * smax;
+    const kernel::PointGrid grid(pts, reach);
     const std::size_t n = pts.size();
     std::vector<Vector3d> vel(n, Vector3d::Zero());
     std::vector<double> energy(n, 0.0), dsigma(n, 0.0);
@@ -85,10 +49,9 @@ SampleResult witkin_heckbert_sample(const ImplicitSurface& surface, const Sample
     for (std::size_t i = 0; i < n; ++i) {
       Vector3d p_target = Vector3d::Zero();
       double e = 0.0, de = 0.0;
-      grid.for_near(pts[i], [&](int j) {
+      grid.visit_ball(pts[i], reach, [&](int j, double d2) {
         if (static_cast<std::size_t>(j) == i) return;
         const Vector3d r = pts[i] - pts[j];
-        const double d2 = r.squaredNorm();
         const double eij = o.alpha * std::exp(-d2 / (2 * sig[i] * sig[i]));  // eq. (9)
         const double eji = o.alpha * std::exp(-d2 / (2 * sig[j] * sig[j]));
         // Eq. (10), symmetrised as in WH94: sigma_i^2 * (-dE_i/dp_i).

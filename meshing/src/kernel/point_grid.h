@@ -1,5 +1,6 @@
-// Uniform 3D cell grid for radius and k-nearest-neighbour queries (seed 002 §3.4, the thesis's
-// `clusterspace`): flat cell arrays filled by a counting sort, O(n) to build.
+// The meshing kernel's point index (issue 28): a uniform 3D cell grid for radius and k-nearest-
+// neighbour queries (seed 002 §3.4, the thesis's `clusterspace`), flat cell arrays filled by a
+// counting sort, O(n) to build. Used by the point-cloud fans and the Witkin-Heckbert sampler.
 #pragma once
 
 #include <Eigen/Core>
@@ -11,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-namespace scanmesh::fans_detail {
+namespace scanmesh::kernel {
 
 //! The points' bounding box without its far outliers, per axis: the 1 % .. 99 % quantile range
 //! widened to four interquartile ranges beyond the quartiles, within the true box. A 1 % quantile
@@ -54,14 +55,14 @@ inline std::pair<Eigen::Vector3d, Eigen::Vector3d> robust_box(
   return {lo, hi};
 }
 
-class CellGrid {
+class PointGrid {
  public:
   //! `cell_edge` is the seed's l; it is enlarged when the grid would have more than 8 cells per
   //! point (degenerate, very flat bounding boxes), which keeps memory O(n).
   //! The grid spans `robust_box(points)`: far outliers fall into the border cells, which reach to
   //! infinity, so one point at 1e20 neither makes the grid astronomically large nor puts every
   //! other point into one cell.
-  CellGrid(const std::vector<Eigen::Vector3d>& points, double cell_edge) : points_(points) {
+  PointGrid(const std::vector<Eigen::Vector3d>& points, double cell_edge) : points_(points) {
     const auto [lo, hi] = robust_box(points);
     lo_ = lo;
     cell_ = cell_edge;
@@ -220,4 +221,4 @@ class CellGrid {
   std::vector<int> order_;
 };
 
-}  // namespace scanmesh::fans_detail
+}  // namespace scanmesh::kernel
