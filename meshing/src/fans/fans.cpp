@@ -1429,36 +1429,11 @@ std::vector<Vector3d> estimate_fan_normals(const std::vector<Vector3d>& input,
 namespace {
 
 // `perm`: the points' cell order (cell_order), computed here when empty.
-FanResult build_fans_distinct(const std::vector<Vector3d>& input, const FanOptions& options,
-                              const std::vector<Eigen::Vector3f>* given_normals,
-                              std::vector<int> perm = {}) {
-  check_input(input, options);
-  // Internally the points are in cell order; indices are mapped back at the end.
-  if (perm.empty()) perm = cell_order(input, options.k);
-  std::vector<Vector3d> points(input.size());
-  for (std::size_t i = 0; i < perm.size(); ++i) points[i] = input[perm[i]];
-  FanResult result;
-  FanStats& st = result.stats;
-  st.points = points.size();
-  const int n = static_cast<int>(points.size());
-  auto t0 = std::chrono::steady_clock::now();
-  Context ctx(points, options, cell_edge_formula(points, options.k));
-  st.cell_edge = ctx.grid.cell_edge();
-  check_crowding(ctx.grid, n);
-  const auto [lo, hi] = kernel::robust_box(points);
-  ctx.eps_len = 1e-9 * (hi - lo).norm();  // Gap (4b): "falls on c"
-  ctx.d_max = options.dmax_factor * st.cell_edge;
-  std::vector<Eigen::Vector3f> given_sorted;
-  if (given_normals) {
-    given_sorted.resize(n);
-    for (int i = 0; i < n; ++i) given_sorted[i] = (*given_normals)[perm[i]];
-  }
-  compute_normals(ctx, given_normals ? &given_sorted : nullptr);
-  st.seconds_normals = seconds_since(t0);
-
-  // Steps 1-6, 7c: one fan per point, independent of the others, so they run in parallel and
-  // the result does not depend on the thread count.
-  t0 = std::chrono::steady_clock::now();
+// Steps 1-6, 7c: one fan per point, independent of the others, so they run in parallel and
+// the result does not depend on the thread count.
+std::vector<std::vector<FanEntry>> build_all_fans(const Context& ctx, const FanOptions& options,
+                                                  FanStats& st) {
+  const int n = static_cast<int>(ctx.normals.size());
   std::vector<std::vector<FanEntry>> fans(n);
   std::size_t fallbacks = 0, open = 0;
 #pragma omp parallel num_threads(omp_threads(options)) reduction(+ : fallbacks, open)
@@ -1487,11 +1462,15 @@ FanResult build_fans_distinct(const std::vector<Vector3d>& input, const FanOptio
   }
   st.pca_fallbacks = fallbacks;
   st.open_fans = open;
-  st.seconds_fans = seconds_since(t0);
+  return fans;
+}
 
-  // Step 9 with votes: triangle (c, r1, r2) is proposed by c and, if they agree, by r1 and r2.
-  // Each distinct triangle is emitted once, by its smallest-index proposer.
-  t0 = std::chrono::steady_clock::now();
+// Step 9 with votes: triangle (c, r1, r2) is proposed by c and, if they agree, by r1 and r2.
+// Each distinct triangle is emitted once, by its smallest-index proposer, as (a, b, c, votes):
+// 3 votes first, then 2, then 1, each in point order.
+std::vector<std::array<int, 4>> vote_triangles(const std::vector<std::vector<FanEntry>>& fans,
+                                               const FanOptions& options) {
+  const int n = static_cast<int>(fans.size());
   // fan(v) has x and y as consecutive spokes with a triangle between them. Either order: the
   // votes must not depend on the normals' orientation, which noise can flip between
   // neighbours; the surface growth below orients the faces.
@@ -1548,24 +1527,17 @@ FanResult build_fans_distinct(const std::vector<Vector3d>& input, const FanOptio
       if (v > 0) proposals[k[v]++] = {c, f[i].id, f[(i + 1) % m].id, v};
     }
   }
-  st.proposed_triangles = proposals.size();
-  Assembly as(points, 1e-9);
-  SurfaceGrowth growth(as, points, proposals, n);
-  growth.grow();
-  st.seeds = growth.seeds();
-  st.glued_triangles = growth.glued();
-  st.unzipped_glues = growth.unzipped();
-  st.rejected_triangles = growth.unused_candidates();
-  fans.clear();
-  fans.shrink_to_fit();
-  if (options.max_hole_edges >= 3)
-    st.hole_triangles = close_holes(as, points, ctx.normals, options.max_hole_edges,
-                                    options.max_edge > 0 ? options.max_edge
-                                                         : std::numeric_limits<double>::infinity());
-  st.inserted_points = insert_unused(as, ctx);
-  st.delaunay_flips = flip_to_delaunay(as, points, omp_threads(options));
-  st.bowtie_faces_removed = detach_bowties(as, n, omp_threads(options));
+  return proposals;
+}
 
+// The assembly's triangles oriented, mapped back to the input's order, turned round as a whole
+// if they enclose a negative volume (without trusted normals), with the points' normals.
+void write_mesh(const Assembly& as, const std::vector<Vector3d>& input,
+                const std::vector<Vector3d>& points, const std::vector<int>& perm,
+                const Context& ctx, bool trust_normals, const FanOptions& options,
+                FanResult& result) {
+  const int n = static_cast<int>(points.size());
+  const auto [lo, hi] = kernel::robust_box(points);
   Mesh& mesh = result.mesh;
   mesh.positions = input;
   std::vector<std::array<int, 3>> faces;
@@ -1587,7 +1559,6 @@ FanResult build_fans_distinct(const std::vector<Vector3d>& input, const FanOptio
   }
   // Without given normals the oriented estimates may point inwards as a whole: turn
   // everything round if the enclosed volume is negative (meaningful on a closed surface).
-  const bool trust_normals = given_normals || options.orient_away_from_axis;
   double volume = 0;
   for (const double v : signed_volume) volume += v;
   double area = 0;
@@ -1601,7 +1572,63 @@ FanResult build_fans_distinct(const std::vector<Vector3d>& input, const FanOptio
   std::vector<std::uint8_t> used(n, 0);
   for (const auto& t : mesh.triangles)
     for (int v : t) used[v] = 1;
-  st.unused_points = static_cast<std::size_t>(std::count(used.begin(), used.end(), 0));
+  result.stats.unused_points =
+      static_cast<std::size_t>(std::count(used.begin(), used.end(), 0));
+}
+
+FanResult build_fans_distinct(const std::vector<Vector3d>& input, const FanOptions& options,
+                              const std::vector<Eigen::Vector3f>* given_normals,
+                              std::vector<int> perm = {}) {
+  check_input(input, options);
+  // Internally the points are in cell order; indices are mapped back at the end.
+  if (perm.empty()) perm = cell_order(input, options.k);
+  std::vector<Vector3d> points(input.size());
+  for (std::size_t i = 0; i < perm.size(); ++i) points[i] = input[perm[i]];
+  FanResult result;
+  FanStats& st = result.stats;
+  st.points = points.size();
+  const int n = static_cast<int>(points.size());
+  auto t0 = std::chrono::steady_clock::now();
+  Context ctx(points, options, cell_edge_formula(points, options.k));
+  st.cell_edge = ctx.grid.cell_edge();
+  check_crowding(ctx.grid, n);
+  const auto [lo, hi] = kernel::robust_box(points);
+  ctx.eps_len = 1e-9 * (hi - lo).norm();  // Gap (4b): "falls on c"
+  ctx.d_max = options.dmax_factor * st.cell_edge;
+  std::vector<Eigen::Vector3f> given_sorted;
+  if (given_normals) {
+    given_sorted.resize(n);
+    for (int i = 0; i < n; ++i) given_sorted[i] = (*given_normals)[perm[i]];
+  }
+  compute_normals(ctx, given_normals ? &given_sorted : nullptr);
+  st.seconds_normals = seconds_since(t0);
+
+  t0 = std::chrono::steady_clock::now();
+  std::vector<std::vector<FanEntry>> fans = build_all_fans(ctx, options, st);
+  st.seconds_fans = seconds_since(t0);
+
+  t0 = std::chrono::steady_clock::now();
+  const std::vector<std::array<int, 4>> proposals = vote_triangles(fans, options);
+  st.proposed_triangles = proposals.size();
+  Assembly as(points, 1e-9);
+  SurfaceGrowth growth(as, points, proposals, n);
+  growth.grow();
+  st.seeds = growth.seeds();
+  st.glued_triangles = growth.glued();
+  st.unzipped_glues = growth.unzipped();
+  st.rejected_triangles = growth.unused_candidates();
+  fans.clear();
+  fans.shrink_to_fit();
+  if (options.max_hole_edges >= 3)
+    st.hole_triangles = close_holes(as, points, ctx.normals, options.max_hole_edges,
+                                    options.max_edge > 0 ? options.max_edge
+                                                         : std::numeric_limits<double>::infinity());
+  st.inserted_points = insert_unused(as, ctx);
+  st.delaunay_flips = flip_to_delaunay(as, points, omp_threads(options));
+  st.bowtie_faces_removed = detach_bowties(as, n, omp_threads(options));
+
+  write_mesh(as, input, points, perm, ctx, given_normals || options.orient_away_from_axis,
+             options, result);
   st.seconds_assembly = seconds_since(t0);
   return result;
 }

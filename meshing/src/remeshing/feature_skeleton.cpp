@@ -138,15 +138,17 @@ Eigen::Vector3d FeatureSkeleton::point(const std::vector<Eigen::Vector3d>& posit
   return (1 - u) * positions[sg.vertices[i]] + u * positions[sg.vertices[i + 1]];
 }
 
-FeatureSkeleton build_feature_skeleton(const TriangleMesh& m, const FeatureLines& lines,
-                                       const SkeletonOptions& options) {
-  FeatureSkeleton sk;
-  const int nv = static_cast<int>(m.pos.size());
-  const int nf = static_cast<int>(m.tri.size());
-  // The edges of M0 with their radial face lists (TriangleMesh's, in face order: a hash map of
-  // vectors here was a third of the skeleton's time on the demo head).
-  const std::vector<std::uint64_t> edges = m.edges();
-  std::set<std::uint64_t> skel;
+namespace {
+
+using SkeletonEdges = std::set<std::uint64_t>;
+using SkeletonAdjacency = std::vector<std::vector<int>>;
+
+// Step 1: the edges of M0 that are skeleton by themselves: boundary and non-manifold edges,
+// label borders, sharp edges. (The radial face lists are TriangleMesh's, in face order: a hash
+// map of vectors here was a third of the skeleton's time on the demo head.)
+SkeletonEdges classify_edges(const TriangleMesh& m, const std::vector<std::uint64_t>& edges,
+                             const SkeletonOptions& options, FeatureSkeleton& sk) {
+  SkeletonEdges skel;
   const double cos_sharp =
       options.sharp_angle_deg > 0 ? std::cos(options.sharp_angle_deg * std::numbers::pi / 180) : 2;
   for (const auto k : edges) {
@@ -170,6 +172,14 @@ FeatureSkeleton build_feature_skeleton(const TriangleMesh& m, const FeatureLines
       }
     }
   }
+  return skel;
+}
+
+// Step 2: the user's feature lines join the skeleton; lines and fixed vertices are checked
+// against the mesh.
+void add_feature_lines(const TriangleMesh& m, const FeatureLines& lines, SkeletonEdges& skel,
+                       FeatureSkeleton& sk) {
+  const int nv = static_cast<int>(m.pos.size());
   for (const auto& l : lines.lines)
     for (std::size_t i = 0; i < l.size(); ++i) {
       if (l[i] >= nv)
@@ -185,17 +195,29 @@ FeatureSkeleton build_feature_skeleton(const TriangleMesh& m, const FeatureLines
     }
   for (int v : lines.fixed)
     if (v >= nv) throw InvalidInputError("fixed vertex " + std::to_string(v) + " is out of range");
+}
 
-  // Skeleton adjacency.
-  std::vector<std::vector<int>> sadj(nv);
+SkeletonAdjacency skeleton_adjacency(int nv, const SkeletonEdges& skel) {
+  SkeletonAdjacency sadj(nv);
   for (auto k : skel) {
     sadj[edge_key_first(k)].push_back(edge_key_second(k));
     sadj[edge_key_second(k)].push_back(edge_key_first(k));
   }
+  return sadj;
+}
+
+// Step 3: free, skeleton (on a chain of degree 2 whose sides agree) or branch vertices; a
+// kink (a turn of at least the kink angle, the sharpest within the reach) and a fixed vertex
+// are branch vertices too.
+void classify_vertices(const TriangleMesh& m, const std::vector<std::uint64_t>& edges,
+                       const SkeletonEdges& skel, const SkeletonAdjacency& sadj,
+                       const FeatureLines& lines, const SkeletonOptions& options,
+                       FeatureSkeleton& sk) {
+  const int nv = static_cast<int>(m.pos.size());
   sk.kind.assign(nv, VertexKind::Free);
   const double cos_kink = std::cos(options.kink_angle_deg * std::numbers::pi / 180);
   const std::unordered_map<std::uint64_t, int> no_map;
-  const std::set<std::uint64_t> no_set;
+  const SkeletonEdges no_set;
   double mean_edge = 0;
   for (const auto k : edges)
     mean_edge += (m.pos[edge_key_first(k)] - m.pos[edge_key_second(k)]).norm();
@@ -251,8 +273,11 @@ FeatureSkeleton build_feature_skeleton(const TriangleMesh& m, const FeatureLines
     if (is_max) sk.kind[v] = VertexKind::Branch;
   }
   for (int v : lines.fixed) sk.kind[v] = VertexKind::Branch;
+}
 
-  // Segments: chains between branch vertices; then closed loops get one branch vertex.
+// Step 4: segments are the chains between branch vertices; a closed loop without one gets one.
+void trace_segments(const TriangleMesh& m, const SkeletonAdjacency& sadj, FeatureSkeleton& sk) {
+  const int nv = static_cast<int>(m.pos.size());
   sk.vertex_segment.assign(nv, -1);
   sk.vertex_arc.assign(nv, 0.0);
   std::set<std::uint64_t> used;
@@ -291,8 +316,12 @@ FeatureSkeleton build_feature_skeleton(const TriangleMesh& m, const FeatureLines
     sk.vertex_segment[v] = -1;
     trace(v, std::min(sadj[v][0], sadj[v][1]));
   }
+}
 
-  // Patches: faces connected across non-skeleton edges.
+// Step 5: patches are the faces connected across non-skeleton edges.
+void find_patches(const TriangleMesh& m, const SkeletonEdges& skel, const SkeletonAdjacency& sadj,
+                  FeatureSkeleton& sk) {
+  const int nf = static_cast<int>(m.tri.size());
   sk.face_patch.assign(nf, -1);
   for (int f0 = 0; f0 < nf; ++f0) {
     if (!m.face_alive[f0] || sk.face_patch[f0] >= 0) continue;
@@ -314,6 +343,20 @@ FeatureSkeleton build_feature_skeleton(const TriangleMesh& m, const FeatureLines
       }
     }
   }
+}
+
+}  // namespace
+
+FeatureSkeleton build_feature_skeleton(const TriangleMesh& m, const FeatureLines& lines,
+                                       const SkeletonOptions& options) {
+  FeatureSkeleton sk;
+  const std::vector<std::uint64_t> edges = m.edges();
+  SkeletonEdges skel = classify_edges(m, edges, options, sk);
+  add_feature_lines(m, lines, skel, sk);
+  const SkeletonAdjacency sadj = skeleton_adjacency(static_cast<int>(m.pos.size()), skel);
+  classify_vertices(m, edges, skel, sadj, lines, options, sk);
+  trace_segments(m, sadj, sk);
+  find_patches(m, skel, sadj, sk);
   return sk;
 }
 

@@ -103,6 +103,16 @@ class Remesher {
   RemeshResult run();
 
  private:
+  // ---- the phases of run(), in order ----
+  void check_options() const;
+  void set_up();             // input, skeleton, density, defect zone; M := M0
+  void copy_input_states();  // M's vertex states from M0 and its skeleton
+  void adapt_phase();        // count and density: split / collapse / flip / relax rounds
+  void area_phase();         // §3.4: area-based moves and Delaunay flips at the exact count
+  void regularize_phase();   // valence regularisation (or the Voronoi rounds of --scheme lloyd)
+  void smooth_phase();       // angle-based smoothing, angle polish, crossing repair
+  RemeshResult result();     // the output mesh with its per-vertex kinds and statistics
+
   // ---- setup ----
   void build_input();
   // ---- where the input cuts itself ----
@@ -1880,8 +1890,7 @@ void Remesher::repair_intersections() {
   }
 }
 
-RemeshResult Remesher::run() {
-  const auto t0 = std::chrono::steady_clock::now();
+void Remesher::check_options() const {
   if (m0_.face_count() == 0) throw InvalidInputError("remesh: the input mesh has no triangles");
   if (o_.target_vertices < 4 || o_.target_vertices > 10000000)
     throw InvalidInputError("remesh: target vertex count must be in [4, 10^7]");
@@ -1890,6 +1899,9 @@ RemeshResult Remesher::run() {
     throw InvalidInputError(
         "remesh: polish rounds and flip cost must be >= 0, the polish angle in (0, 60) deg and "
         "the needle angle in [0, 60) deg");
+}
+
+void Remesher::set_up() {
   cos_dist_ = std::cos(o_.theta_dist_deg * std::numbers::pi / 180);
   cos_glatt_ = std::cos(o_.theta_glatt_deg * std::numbers::pi / 180);
   report("setup", 0);
@@ -1916,6 +1928,16 @@ RemeshResult Remesher::run() {
   // M := M0 with the skeleton copied.
   m_ = m0_;
   patch_ = sk_.face_patch;
+  copy_input_states();
+  sedge_ = sk_.edge_segment;
+  seg_edges_.assign(sk_.segments.size(), 0);
+  for (const auto& [k, s] : sedge_) ++seg_edges_[s];
+  scale_ = density_scale(m0_, psi0_, o_.target_vertices);
+  st_.input_vertices = m0_.vertex_count();
+  st_.input_faces = m0_.face_count();
+}
+
+void Remesher::copy_input_states() {
   vs_.resize(m0_.pos.size());
   for (int v = 0; v < static_cast<int>(m0_.pos.size()); ++v) {
     VState& s = vs_[v];
@@ -1933,16 +1955,9 @@ RemeshResult Remesher::run() {
     s.sq = sq_of(s);
     s.normal = free_normal(s);
   }
-  sedge_ = sk_.edge_segment;
-  seg_edges_.assign(sk_.segments.size(), 0);
-  for (const auto& [k, s] : sedge_) ++seg_edges_[s];
-  scale_ = density_scale(m0_, psi0_, o_.target_vertices);
-  st_.input_vertices = m0_.vertex_count();
-  st_.input_faces = m0_.face_count();
-  st_.seconds_setup = seconds_since(t0);
+}
 
-  // Phase 1: vertex count and density (collapse / split), with flips and area-based relaxation.
-  auto t1 = std::chrono::steady_clock::now();
+void Remesher::adapt_phase() {
   const int rounds = std::max(1, o_.adapt_iterations);
   for (int it = 0; it < rounds; ++it) {
     report("adapt", static_cast<double>(it) / rounds);
@@ -1955,9 +1970,10 @@ RemeshResult Remesher::run() {
     const double ratio = static_cast<double>(m_.vertex_count()) / o_.target_vertices;
     scale_ *= std::pow(ratio, 0.5);
   }
-  st_.seconds_adapt = seconds_since(t1);
+}
+
+void Remesher::area_phase() {
   embed_check_ = o_.prevent_intersections;
-  t1 = std::chrono::steady_clock::now();
   report("count", 0);
   adjust_count();
   // Area-based remeshing (§3.4): n_step x (n_area moves + Delaunay flips), skeleton control.
@@ -1967,36 +1983,38 @@ RemeshResult Remesher::run() {
     skeleton_density_control();
     adjust_count();
   }
-  st_.seconds_count = seconds_since(t1);
-  t1 = std::chrono::steady_clock::now();
+}
+
+void Remesher::regularize_phase() {
   report("regularize", 0);
-  if (o_.scheme == RemeshScheme::Regularize) {
-    regularize();
-    // Skeleton sampling follows the regularised surroundings: (4.4)/(4.5) with valence flips
-    // until it settles, then the count is restored and regularised again.
-    for (int k = 0; k < 4; ++k) {
-      const std::size_t before = st_.skeleton_splits + st_.skeleton_collapses;
-      skeleton_density_control();
-      simple_flips();
-      for (int j = 0; j < 2; ++j) skeleton_relax_pass();
-      if (st_.skeleton_splits + st_.skeleton_collapses == before) break;
-    }
-    adjust_count(CountOrder::ValenceFirst);
-    regularize();
-    adjust_count(CountOrder::ValenceFirst);
-    // The count adjustment's collapses leave dipoles: flips and drives only. Three rounds find
-    // most of what ten do (rounds of 21, 8, 7, then 3, 2, 2, 1 kept drives on the demo head).
-    drive_dipoles(3);
-  } else {
+  if (o_.scheme != RemeshScheme::Regularize) {
     for (int k = 0; k < 5; ++k) {
       relax_rounds(1, Relax::VoronoiCentroid);
       flip_pass(true);
       skeleton_density_control();
     }
     adjust_count();
+    return;
   }
-  st_.seconds_regularize = seconds_since(t1);
-  t1 = std::chrono::steady_clock::now();
+  regularize();
+  // Skeleton sampling follows the regularised surroundings: (4.4)/(4.5) with valence flips
+  // until it settles, then the count is restored and regularised again.
+  for (int k = 0; k < 4; ++k) {
+    const std::size_t before = st_.skeleton_splits + st_.skeleton_collapses;
+    skeleton_density_control();
+    simple_flips();
+    for (int j = 0; j < 2; ++j) skeleton_relax_pass();
+    if (st_.skeleton_splits + st_.skeleton_collapses == before) break;
+  }
+  adjust_count(CountOrder::ValenceFirst);
+  regularize();
+  adjust_count(CountOrder::ValenceFirst);
+  // The count adjustment's collapses leave dipoles: flips and drives only. Three rounds find
+  // most of what ten do (rounds of 21, 8, 7, then 3, 2, 2, 1 kept drives on the demo head).
+  drive_dipoles(3);
+}
+
+void Remesher::smooth_phase() {
   for (int k = 0; k < o_.smoothing_passes; ++k) {
     report("smooth", static_cast<double>(k) / std::max(1, o_.smoothing_passes));
     relax_rounds(1, o_.scheme == RemeshScheme::Regularize ? Relax::AngleBased
@@ -2004,8 +2022,9 @@ RemeshResult Remesher::run() {
   }
   polish_angles();
   repair_intersections();
-  st_.seconds_smooth = seconds_since(t1);
+}
 
+RemeshResult Remesher::result() {
   RemeshResult r;
   std::vector<int> map;
   r.mesh = m_.to_mesh(&map);
@@ -2027,10 +2046,31 @@ RemeshResult Remesher::run() {
   st_.skeleton_segments = sk_.segments.size();
   st_.branch_vertices = sk_.branch_vertex_count();
   st_.patches = static_cast<std::size_t>(sk_.patch_count);
-  st_.seconds_total = seconds_since(t0);
   r.stats = st_;
   r.skeleton = std::move(sk_);
   r.density = std::move(psi0_);
+  return r;
+}
+
+RemeshResult Remesher::run() {
+  const auto t0 = std::chrono::steady_clock::now();
+  check_options();
+  set_up();
+  st_.seconds_setup = seconds_since(t0);
+  auto t1 = std::chrono::steady_clock::now();
+  adapt_phase();
+  st_.seconds_adapt = seconds_since(t1);
+  t1 = std::chrono::steady_clock::now();
+  area_phase();
+  st_.seconds_count = seconds_since(t1);
+  t1 = std::chrono::steady_clock::now();
+  regularize_phase();
+  st_.seconds_regularize = seconds_since(t1);
+  t1 = std::chrono::steady_clock::now();
+  smooth_phase();
+  st_.seconds_smooth = seconds_since(t1);
+  RemeshResult r = result();
+  r.stats.seconds_total = seconds_since(t0);
   report("done", 1);
   return r;
 }
