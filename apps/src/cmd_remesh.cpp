@@ -24,21 +24,17 @@ namespace scanmesh::cli {
 
 namespace {
 
+// The options that map one to one onto the library's are bound straight to `options`; the
+// fields beside it are the ones the command line says differently (a name for the scheme, a
+// file or "auto" for the features, a flag for uniform density or no prevention).
 struct RemeshArgs {
   std::string mesh;
   std::string out;
-  int vertices = 20000;
+  remeshing::RemeshOptions options;
   std::string features;  // file, "auto" or empty
-  double sharp_deg = 60.0;
-  double kink_deg = 60.0, kink_reach = 0.0;
-  double gamma = 0.5;
-  int filter = 10;
-  double clip = 4.0;
-  double curvature_radius = -1, gradation = 0.3;
+  double sharp_deg = 60.0;  // the sharp-edge angle of --features auto
   bool uniform = false;
   std::string scheme = "regularize";
-  double theta_dist = remeshing::RemeshOptions{}.theta_dist_deg,
-         theta_glatt = remeshing::RemeshOptions{}.theta_glatt_deg;
   bool no_intersections = false;
   // The scan clean-up: auto (when the input looks like a scan), forced or off; each explicit
   // clean-up option overrides what auto chose.
@@ -46,12 +42,7 @@ struct RemeshArgs {
   std::optional<int> min_component, fill_holes;
   std::optional<double> needle_angle, tip_angle;
   bool remove_spikes = false;
-  bool queue = false;
   bool allow_local_intersections = false;
-  int polish_rounds = 3;
-  double polish_angle = 30.0;
-  int polish_flip_cost = 2;
-  double polish_floor = 30.0;
   bool write_prepared = false;
 };
 
@@ -61,7 +52,7 @@ remeshing::PrepareOptions choose_prepare(const Mesh& raw, const RemeshArgs& a) {
   const TopologyStats ts = topology_stats(raw);
   const bool scan = looks_like_scan(ts);
   if (!a.no_prepare && (a.force_prepare || scan)) {
-    po = scan_prepare_options(raw, a.vertices);
+    po = scan_prepare_options(raw, a.options.target_vertices);
     say() << "prepare: " << (scan ? "the input looks like a scan" : "asked for") << " ("
           << ts.boundary_loops << " boundary loops, " << ts.components << " components, "
           << ts.border_ears << " border ears): scan clean-up at the output's edge length "
@@ -72,7 +63,7 @@ remeshing::PrepareOptions choose_prepare(const Mesh& raw, const RemeshArgs& a) {
   if (a.needle_angle) po.needle_angle_deg = *a.needle_angle;
   if (a.remove_spikes && !po.remove_spikes) {
     po.remove_spikes = true;
-    po.tip_reach_mm = uniform_edge_length(raw, a.vertices);
+    po.tip_reach_mm = uniform_edge_length(raw, a.options.target_vertices);
   }
   if (a.tip_angle) po.tip_angle_deg = *a.tip_angle;
   return po;
@@ -118,24 +109,10 @@ int run_remesh(const RemeshArgs& a) {
     say() << ", " << ts.nonmanifold_edges << " non-manifold and " << ts.inconsistent_edges
           << " inconsistently oriented edges\n";
   }
-  RemeshOptions o;
-  o.target_vertices = a.vertices;
+  RemeshOptions o = a.options;
   o.scheme = parse_remesh_scheme(a.scheme);
-  o.density.gamma = a.uniform ? 0.0 : a.gamma;
-  o.density.n_filter = a.filter;
-  o.density.clip = a.clip;
-  o.density.curvature_radius = a.curvature_radius;
-  o.density.gradation = a.gradation;
-  o.theta_dist_deg = a.theta_dist;
-  o.skeleton.kink_angle_deg = a.kink_deg;
-  o.regularize_queue = a.queue;
+  if (a.uniform) o.density.gamma = 0.0;
   o.prevent_intersections = !a.allow_local_intersections;
-  o.skeleton.kink_reach_mm = a.kink_reach;
-  o.theta_glatt_deg = a.theta_glatt;
-  o.polish_rounds = a.polish_rounds;
-  o.polish_angle_deg = a.polish_angle;
-  o.polish_flip_cost = a.polish_flip_cost;
-  o.polish_floor_deg = a.polish_floor;
   if (a.features == "auto") {
     o.skeleton.sharp_angle_deg = a.sharp_deg;
   } else if (!a.features.empty()) {
@@ -147,7 +124,7 @@ int run_remesh(const RemeshArgs& a) {
   };
   const RemeshResult r = remesh(input, o);
   progress->finish();
-  require_vertex_count(r, a.vertices, input_loops);
+  require_vertex_count(r, a.options.target_vertices, input_loops);
   const std::filesystem::path dir(a.out);
   StagedFiles outputs;  // all outputs or none
   write_ply(outputs.stage(dir / "mesh.ply"), r.mesh);
@@ -156,10 +133,10 @@ int run_remesh(const RemeshArgs& a) {
   const RemeshStats& s = r.stats;
   const nlohmann::json report = {
       {"input", a.mesh},
-      {"target_vertices", a.vertices},
+      {"target_vertices", a.options.target_vertices},
       {"scheme", a.scheme},
       {"gamma", o.density.gamma},
-      {"n_filter", a.filter},
+      {"n_filter", o.density.n_filter},
       {"curvature_radius", o.density.curvature_radius},
       {"gradation", o.density.gradation},
       {"prepare",
@@ -225,7 +202,7 @@ int run_remesh(const RemeshArgs& a) {
        << "  Hausdorff " << format_number(q.hausdorff) << " mm ("
        << format_number(100 * q.hausdorff / q.bbox_diagonal)
        << " % of the diagonal), mean distance " << format_number(q.mean_distance) << " mm\n"
-       << "  polish: faces < " << a.polish_angle << " deg " << s.polish_bad_before << " -> "
+       << "  polish: faces < " << o.polish_angle_deg << " deg " << s.polish_bad_before << " -> "
        << s.polish_bad_after << " (" << s.polish_moves << " moves, " << s.polish_flips
        << " flips); repair splits " << s.repair_splits;
   if (q.self_intersections_checked)
@@ -254,7 +231,7 @@ void register_remesh_commands(CLI::App& app, CommandList& commands) {
   c->add_option("mesh", args->mesh, "Input mesh (.ply with face labels kept, .off, .obj, .stl)")
       ->required()
       ->check(CLI::ExistingFile);
-  c->add_option("--vertices", args->vertices, "Target vertex count")
+  c->add_option("--vertices", args->options.target_vertices, "Target vertex count")
       ->required()
       ->check(in_range(4, 1e8));
   c->add_option("--features", args->features,
@@ -262,31 +239,31 @@ void register_remesh_commands(CLI::App& app, CommandList& commands) {
   c->add_option("--sharp", args->sharp_deg,
                 "Dihedral angle (deg) of sharp edges for --features auto")
       ->check(in_range(0, 180));
-  c->add_option("--kink-angle", args->kink_deg,
+  c->add_option("--kink-angle", args->options.skeleton.kink_angle_deg,
                 "Turn (deg) of a skeleton chain that makes a fixed branch vertex (thesis: 60)")
       ->check(in_range(0, 180));
-  c->add_option("--kink-reach", args->kink_reach,
+  c->add_option("--kink-reach", args->options.skeleton.kink_reach_mm,
                 "Arc length (mm) over which kinks are measured (0: the mean target edge length)")
       ->check(in_range(0, 1e6));
-  c->add_option("--gamma", args->gamma, "Density contrast gamma (0: uniform)")
+  c->add_option("--gamma", args->options.density.gamma, "Density contrast gamma (0: uniform)")
       ->check(in_range(0, 10));
-  c->add_option("--filter", args->filter, "n_filter smoothing passes of the density")
+  c->add_option("--filter", args->options.density.n_filter, "n_filter smoothing passes of the density")
       ->check(in_range(0, 1000));
-  c->add_option("--clip", args->clip, "Max ratio of target edge length to its median")
+  c->add_option("--clip", args->options.density.clip, "Max ratio of target edge length to its median")
       ->check(in_range(1, 1000));
   c->add_flag("--uniform", args->uniform, "Uniform density (same as --gamma 0)");
-  c->add_option("--curvature-radius", args->curvature_radius,
+  c->add_option("--curvature-radius", args->options.density.curvature_radius,
                 "Radius (mm) the density's curvature is fitted over (-1: the output's mean edge "
                 "length; 0: the input's 2-ring, as seed 001)")
       ->check(in_range(-1, 1e6));
-  c->add_option("--gradation", args->gradation,
+  c->add_option("--gradation", args->options.density.gradation,
                 "Largest slope of the target edge length over the surface (0: no limit)")
       ->check(in_range(0, 1000));
   c->add_option("--scheme", args->scheme, "regularize | lloyd")
       ->check(CLI::IsMember({"regularize", "lloyd"}));
-  c->add_option("--theta-dist", args->theta_dist, "E_dist threshold (deg)")
+  c->add_option("--theta-dist", args->options.theta_dist_deg, "E_dist threshold (deg)")
       ->check(in_range(0, 180));
-  c->add_option("--theta-glatt", args->theta_glatt, "E_glatt threshold (deg)")
+  c->add_option("--theta-glatt", args->options.theta_glatt_deg, "E_glatt threshold (deg)")
       ->check(in_range(0, 180));
   c->add_flag("--no-intersections", args->no_intersections,
               "Skip the self-intersection test of the report");
@@ -312,7 +289,7 @@ void register_remesh_commands(CLI::App& app, CommandList& commands) {
   c->add_flag("--remove-spikes", args->remove_spikes,
               "Strip one-triangle-wide spikes and strands of a ragged border and the smaller "
               "fans at pinch vertices before remeshing");
-  c->add_flag("--regularize-queue", args->queue,
+  c->add_flag("--regularize-queue", args->options.regularize_queue,
               "Regularisation flips from a priority queue, worst valence deviation first");
   c->add_flag("--no-prevention", args->allow_local_intersections,
               "Do not refuse operations whose faces cut a neighbouring face (for measuring)");
@@ -320,16 +297,16 @@ void register_remesh_commands(CLI::App& app, CommandList& commands) {
                 "With --remove-spikes: border tips sharper than this (deg) over one target edge "
                 "length are removed")
       ->check(in_range(0, 180));
-  c->add_option("--polish-rounds", args->polish_rounds,
+  c->add_option("--polish-rounds", args->options.polish_rounds,
                 "Angle polish rounds after the smoothing (0: off; docs/remeshing.md)")
       ->check(in_range(0, 1000));
-  c->add_option("--polish-angle", args->polish_angle,
+  c->add_option("--polish-angle", args->options.polish_angle_deg,
                 "The polish works on faces whose min angle is below this (deg)")
       ->check(in_range(0, 60));
-  c->add_option("--polish-flip-cost", args->polish_flip_cost,
+  c->add_option("--polish-flip-cost", args->options.polish_flip_cost,
                 "Largest valence cost (rise of R) of a polish flip; 4 = a flip in a regular patch")
       ->check(in_range(0, 1000));
-  c->add_option("--polish-floor", args->polish_floor,
+  c->add_option("--polish-floor", args->options.polish_floor_deg,
                 "Faces still below this min angle (deg) after the polish get more rounds with "
                 "the normal error bounds widened (0: off)")
       ->check(in_range(0, 60));
