@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "scanmesh/meshing/mesh_check.h"
 #include "scanmesh/meshing/kernel/triangle_mesh.h"
+#include "scanmesh/meshing/mesh_check.h"
 #include "scanmesh/meshing/remeshing/remesh_quality.h"
 
 namespace scanmesh::bench {

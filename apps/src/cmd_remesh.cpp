@@ -247,9 +247,11 @@ void register_remesh_commands(CLI::App& app, CommandList& commands) {
       ->check(in_range(0, 1e6));
   c->add_option("--gamma", args->options.density.gamma, "Density contrast gamma (0: uniform)")
       ->check(in_range(0, 10));
-  c->add_option("--filter", args->options.density.n_filter, "n_filter smoothing passes of the density")
+  c->add_option("--filter", args->options.density.n_filter,
+                "n_filter smoothing passes of the density")
       ->check(in_range(0, 1000));
-  c->add_option("--clip", args->options.density.clip, "Max ratio of target edge length to its median")
+  c->add_option("--clip", args->options.density.clip,
+                "Max ratio of target edge length to its median")
       ->check(in_range(1, 1000));
   c->add_flag("--uniform", args->uniform, "Uniform density (same as --gamma 0)");
   c->add_option("--curvature-radius", args->options.density.curvature_radius,

@@ -56,8 +56,7 @@ void expect_adjacency_consistent(const TriangleMesh& m) {
   for (std::size_t v = 0; v < m.vfaces.size(); ++v)
     for (int f : m.vfaces[v]) {
       EXPECT_TRUE(m.face_alive[f]);
-      EXPECT_NE(std::find(m.tri[f].begin(), m.tri[f].end(), static_cast<int>(v)),
-                m.tri[f].end());
+      EXPECT_NE(std::find(m.tri[f].begin(), m.tri[f].end(), static_cast<int>(v)), m.tri[f].end());
     }
 }
 
@@ -181,9 +180,8 @@ TEST(KernelTriangleMesh, LinkConditionSeesACommonNeighbourOffTheEdge) {
   // 0 and 1 share the faces (0, 1, 2) and (1, 0, 3), and also the neighbour 4 through faces
   // that do not contain the edge: collapsing 0-1 would pinch the surface at 4.
   const std::vector<std::array<int, 3>> t{{0, 1, 2}, {1, 0, 3}, {0, 4, 5}, {1, 6, 4}};
-  const TriangleMesh m({{0, 0, 0}, {1, 0, 0}, {0.5, 1, 0}, {0.5, -1, 0}, {0.5, 0, 2},
-                        {-1, 0, 2}, {2, 0, 2}},
-                       t);
+  const TriangleMesh m(
+      {{0, 0, 0}, {1, 0, 0}, {0.5, 1, 0}, {0.5, -1, 0}, {0.5, 0, 2}, {-1, 0, 2}, {2, 0, 2}}, t);
   EXPECT_FALSE(m.link_condition(0, 1, m.edge_faces(0, 1), m.neighbours(0), m.neighbours(1)));
   EXPECT_TRUE(m.link_condition(0, 2, m.edge_faces(0, 2), m.neighbours(0), m.neighbours(2)));
 }

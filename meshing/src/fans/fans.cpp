@@ -1572,8 +1572,7 @@ void write_mesh(const Assembly& as, const std::vector<Vector3d>& input,
   std::vector<std::uint8_t> used(n, 0);
   for (const auto& t : mesh.triangles)
     for (int v : t) used[v] = 1;
-  result.stats.unused_points =
-      static_cast<std::size_t>(std::count(used.begin(), used.end(), 0));
+  result.stats.unused_points = static_cast<std::size_t>(std::count(used.begin(), used.end(), 0));
 }
 
 FanResult build_fans_distinct(const std::vector<Vector3d>& input, const FanOptions& options,
@@ -1620,15 +1619,15 @@ FanResult build_fans_distinct(const std::vector<Vector3d>& input, const FanOptio
   fans.clear();
   fans.shrink_to_fit();
   if (options.max_hole_edges >= 3)
-    st.hole_triangles = close_holes(as, points, ctx.normals, options.max_hole_edges,
-                                    options.max_edge > 0 ? options.max_edge
-                                                         : std::numeric_limits<double>::infinity());
+    st.hole_triangles = close_holes(
+        as, points, ctx.normals, options.max_hole_edges,
+        options.max_edge > 0 ? options.max_edge : std::numeric_limits<double>::infinity());
   st.inserted_points = insert_unused(as, ctx);
   st.delaunay_flips = flip_to_delaunay(as, points, omp_threads(options));
   st.bowtie_faces_removed = detach_bowties(as, n, omp_threads(options));
 
-  write_mesh(as, input, points, perm, ctx, given_normals || options.orient_away_from_axis,
-             options, result);
+  write_mesh(as, input, points, perm, ctx, given_normals || options.orient_away_from_axis, options,
+             result);
   st.seconds_assembly = seconds_since(t0);
   return result;
 }

@@ -175,9 +175,10 @@ class PointGrid {
       });
       if (out.size() >= want || r > 1e3 * cell_ * (dims_[0] + dims_[1] + dims_[2])) break;
       // Too few: grow by the missing share of the disc area (at least 1.3x, at most 2x).
-      const double grow = out.empty() ? 2.0
-                                      : std::sqrt(static_cast<double>(want) /
-                                                  static_cast<double>(out.size())) * 1.15;
+      const double grow =
+          out.empty()
+              ? 2.0
+              : std::sqrt(static_cast<double>(want) / static_cast<double>(out.size())) * 1.15;
       r *= std::clamp(grow, 1.3, 2.0);
     }
     // The K smallest (distance, index) pairs, sorted: a total order, so the same as a partial

@@ -524,7 +524,8 @@ struct SpringNetwork::Impl {
           }
       double largest = 0.0;
       for (int a : alive) {
-        if (particles[a].boundary || !particles[a].defined || particles[a].f.gradient.squaredNorm() == 0.0) {
+        if (particles[a].boundary || !particles[a].defined ||
+            particles[a].f.gradient.squaredNorm() == 0.0) {
           force[a].setZero();
           continue;
         }
@@ -1336,7 +1337,8 @@ SpringNetwork::SpringNetwork(const Mesh& start, const ParticleOptions& options)
   for (const auto& [k, n] : count) {
     const int a = edge_key_first(k), b = edge_key_second(k);
     if (n > 1) throw InvalidInputError("particles: start mesh is not consistently oriented");
-    if (!count.count(directed_edge_key(b, a))) m.particles[a].boundary = m.particles[b].boundary = true;
+    if (!count.count(directed_edge_key(b, a)))
+      m.particles[a].boundary = m.particles[b].boundary = true;
   }
   for (std::size_t v = 0; v < m.particles.size(); ++v) {
     if (m.mesh.vfaces[v].empty()) m.kill_vertex(static_cast<int>(v));

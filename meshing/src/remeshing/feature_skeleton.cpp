@@ -28,7 +28,8 @@ int parse_index(const std::string& token, const std::string& name, int line_no) 
 }
 
 // Faces around v grouped into fans connected across manifold non-skeleton edges.
-int count_fans(const TriangleMesh& m, int v, const std::unordered_map<std::uint64_t, int>& skel_edges,
+int count_fans(const TriangleMesh& m, int v,
+               const std::unordered_map<std::uint64_t, int>& skel_edges,
                const std::set<std::uint64_t>& skel_set) {
   const auto& fs = m.vfaces[v];
   std::vector<int> parent(fs.size());

@@ -14,72 +14,37 @@
 #include "scanmesh/core/render.h"
 #include "scanmesh/meshing/mesh_check.h"
 
+#include "../kernel/triangle_grid.h"
+
 namespace scanmesh::remeshing {
 
 namespace {
 
 using Vec3 = Eigen::Vector3d;
 
-// Uniform grid of triangle boxes with shell-by-shell nearest search.
-class TriangleGrid {
+// Nearest-triangle distances: the kernel's triangle grid searched shell by shell.
+class NearestTriangle {
  public:
-  explicit TriangleGrid(const Mesh& m) : m_(m) {
-    lo_ = Vec3::Constant(std::numeric_limits<double>::max());
-    Vec3 hi = -lo_;
-    for (const auto& p : m.positions) {
-      lo_ = lo_.cwiseMin(p);
-      hi = hi.cwiseMax(p);
-    }
-    const Vec3 ext = (hi - lo_).cwiseMax(1e-9);
-    const double faces = std::max<double>(1, static_cast<double>(m.triangles.size()));
-    // Cells of about two mean edges hold a handful of faces each on a surface; a cell from
-    // the box's volume per face held ~160 faces of the demo head, and a query tests 27 cells.
-    // At most ~8 cells per face, and no more than 512 along an axis.
-    double edge_sum = 0;
-    for (const auto& t : m.triangles) edge_sum += (m.positions[t[0]] - m.positions[t[1]]).norm();
-    cell_ = 2 * edge_sum / faces;
-    cell_ = std::max({cell_, std::cbrt(ext.prod() / (8 * faces)), ext.maxCoeff() / 512, 1e-9});
-    for (int i = 0; i < 3; ++i) n_[i] = std::max(1, static_cast<int>(std::ceil(ext[i] / cell_)));
-    start_.assign(static_cast<std::size_t>(n_[0]) * n_[1] * n_[2] + 1, 0);
-    std::vector<std::pair<std::size_t, int>> items;
-    for (std::size_t f = 0; f < m.triangles.size(); ++f) {
-      const auto& t = m.triangles[f];
-      Vec3 a = m.positions[t[0]], b = a;
-      for (int c : t) {
-        a = a.cwiseMin(m.positions[c]);
-        b = b.cwiseMax(m.positions[c]);
-      }
-      const auto ia = index(a), ib = index(b);
-      for (int z = ia[2]; z <= ib[2]; ++z)
-        for (int y = ia[1]; y <= ib[1]; ++y)
-          for (int x = ia[0]; x <= ib[0]; ++x)
-            items.push_back({cell_id(x, y, z), static_cast<int>(f)});
-    }
-    std::sort(items.begin(), items.end());
-    faces_.resize(items.size());
-    for (std::size_t i = 0; i < items.size(); ++i) {
-      faces_[i] = items[i].second;
-      ++start_[items[i].first + 1];
-    }
-    for (std::size_t i = 1; i < start_.size(); ++i) start_[i] += start_[i - 1];
-  }
+  explicit NearestTriangle(const Mesh& m)
+      : m_(m), grid_(layout_for(m), boxes(m, true), boxes(m, false)) {}
 
   double distance(const Vec3& p) const {
-    const auto c = index(p);
+    const auto c = grid_.cell_of(p);
+    const auto& n = grid_.layout().dims;
+    const double cell = grid_.layout().cell;
     double best = std::numeric_limits<double>::max();
-    const int maxr = std::max({n_[0], n_[1], n_[2]});
-    for (int r = 0; r <= maxr; ++r) {
+    const long long maxr = std::max({n[0], n[1], n[2]});
+    for (long long r = 0; r <= maxr; ++r) {
       // Everything within r cells is checked; the rest is at least r * cell away from p's cell.
-      if (r > 0 && best < std::pow((r - 1) * cell_, 2)) break;
-      for (int z = c[2] - r; z <= c[2] + r; ++z)
-        for (int y = c[1] - r; y <= c[1] + r; ++y)
-          for (int x = c[0] - r; x <= c[0] + r; ++x) {
+      if (r > 0 && best < std::pow(static_cast<double>(r - 1) * cell, 2)) break;
+      for (long long z = c[2] - r; z <= c[2] + r; ++z)
+        for (long long y = c[1] - r; y <= c[1] + r; ++y)
+          for (long long x = c[0] - r; x <= c[0] + r; ++x) {
             if (std::max({std::abs(x - c[0]), std::abs(y - c[1]), std::abs(z - c[2])}) != r)
               continue;
-            if (x < 0 || y < 0 || z < 0 || x >= n_[0] || y >= n_[1] || z >= n_[2]) continue;
-            const std::size_t id = cell_id(x, y, z);
-            for (std::size_t i = start_[id]; i < start_[id + 1]; ++i) {
-              const auto& t = m_.triangles[faces_[i]];
+            if (x < 0 || y < 0 || z < 0 || x >= n[0] || y >= n[1] || z >= n[2]) continue;
+            for (const int f : grid_.triangles_in(grid_.flat(x, y, z))) {
+              const auto& t = m_.triangles[f];
               best = std::min(
                   best, point_triangle_squared_distance(p, m_.positions[t[0]], m_.positions[t[1]],
                                                         m_.positions[t[2]]));
@@ -90,21 +55,42 @@ class TriangleGrid {
   }
 
  private:
-  std::array<int, 3> index(const Vec3& p) const {
-    std::array<int, 3> i{};
-    for (int k = 0; k < 3; ++k)
-      i[k] = std::clamp(static_cast<int>(std::floor((p[k] - lo_[k]) / cell_)), 0, n_[k] - 1);
-    return i;
+  // Cells of about two mean edges hold a handful of faces each on a surface; a cell from the
+  // box's volume per face held ~160 faces of the demo head, and a query tests 27 cells. At most
+  // ~8 cells per face, and no more than 512 along an axis.
+  static kernel::TriangleGrid::Layout layout_for(const Mesh& m) {
+    Vec3 lo = Vec3::Constant(std::numeric_limits<double>::max());
+    Vec3 hi = -lo;
+    for (const auto& p : m.positions) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    const Vec3 ext = (hi - lo).cwiseMax(1e-9);
+    const double faces = std::max<double>(1, static_cast<double>(m.triangles.size()));
+    double edge_sum = 0;
+    for (const auto& t : m.triangles) edge_sum += (m.positions[t[0]] - m.positions[t[1]]).norm();
+    double cell = 2 * edge_sum / faces;
+    cell = std::max({cell, std::cbrt(ext.prod() / (8 * faces)), ext.maxCoeff() / 512, 1e-9});
+    kernel::TriangleGrid::Layout layout{lo, cell, {}};
+    for (int i = 0; i < 3; ++i)
+      layout.dims[i] = std::max(1, static_cast<int>(std::ceil(ext[i] / cell)));
+    return layout;
   }
-  std::size_t cell_id(int x, int y, int z) const {
-    return (static_cast<std::size_t>(z) * n_[1] + y) * n_[0] + x;
+  // The triangles' box corners: the lower ones or the upper ones.
+  static std::vector<Vec3> boxes(const Mesh& m, bool lower) {
+    std::vector<Vec3> out(m.triangles.size());
+    for (std::size_t f = 0; f < m.triangles.size(); ++f) {
+      const auto& t = m.triangles[f];
+      Vec3 c = m.positions[t[0]];
+      for (int k : t)
+        c = lower ? Vec3(c.cwiseMin(m.positions[k])) : Vec3(c.cwiseMax(m.positions[k]));
+      out[f] = c;
+    }
+    return out;
   }
+
   const Mesh& m_;
-  Vec3 lo_;
-  double cell_ = 1;
-  std::array<int, 3> n_{};
-  std::vector<std::size_t> start_;
-  std::vector<int> faces_;
+  kernel::TriangleGrid grid_;
 };
 
 Rgb8 ramp(double t) {  // blue -> cyan -> yellow -> red
@@ -125,7 +111,7 @@ std::array<double, 2> sampled_distance(const Mesh& a, const Mesh& b) {
     samples.push_back(0.5 * (p + q));
     samples.push_back((4 * p + q + r) / 6);
   }
-  const TriangleGrid grid(b);
+  const NearestTriangle grid(b);
   std::vector<double> d(samples.size());
 #pragma omp parallel for schedule(dynamic, 1024)
   for (std::size_t i = 0; i < samples.size(); ++i) d[i] = grid.distance(samples[i]);
