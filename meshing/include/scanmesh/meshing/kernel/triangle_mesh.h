@@ -5,7 +5,7 @@
 // faces and vertices stay in the arrays, marked dead. The operations change topology only: whether
 // a change is wanted (lengths, angles, feature lines, a face's distance to the input) is the
 // caller's policy, as in pmp-library's remeshing, which asks its mesh for is_collapse_ok / split /
-// flip. docs/ARCHITECTURE.md, "Meshing kernel".
+// flip. docs/ARCHITECTURE.md, "The meshing kernel".
 #pragma once
 
 #include <Eigen/Core>
@@ -113,7 +113,7 @@ class TriangleMesh {
   NeighbourList neighbours(int v) const;
   //! Number of distinct neighbours. Cached per vertex and forgotten by every change of a face
   //! at the vertex (the regularisation asks for the same valences hundreds of thousands of
-  //! times between two changes; not thread-safe, like every other use of an TriangleMesh).
+  //! times between two changes; not thread-safe, like every other use of a TriangleMesh).
   int valence(int v) const;
   //! All distinct edges as keys, sorted.
   std::vector<std::uint64_t> edges() const;
