@@ -8,4 +8,7 @@ function(scanmesh_module_library module)
   target_include_directories(scanmesh_${module} PUBLIC
     $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include>)
   target_link_libraries(scanmesh_${module} PRIVATE $<BUILD_INTERFACE:scanmesh_warnings>)
+  # Every module is an installed component (cmake/ScanmeshPackage.cmake), in the order the
+  # top-level CMakeLists.txt adds them: dependency order.
+  set_property(GLOBAL APPEND PROPERTY SCANMESH_COMPONENTS ${module})
 endfunction()

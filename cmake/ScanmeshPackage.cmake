@@ -10,10 +10,11 @@
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
-# The components, each a module library, in dependency order (docs/ARCHITECTURE.md). The
-# inter-component and third-party dependencies a consumer needs are in scanmeshConfig.cmake.in;
-# tests/install checks them by building a consumer against an installed tree.
-set(SCANMESH_COMPONENTS core sim drivers acquisition reconstruction meshing)
+# The components: every module library made by scanmesh_module_library, in dependency order
+# (docs/ARCHITECTURE.md). The inter-component and third-party dependencies a consumer needs are
+# in scanmeshConfig.cmake.in; tests/install checks them by building a consumer against an
+# installed tree.
+get_property(SCANMESH_COMPONENTS GLOBAL PROPERTY SCANMESH_COMPONENTS)
 set(scanmesh_config_dir ${CMAKE_INSTALL_LIBDIR}/cmake/scanmesh)
 
 foreach(component IN LISTS SCANMESH_COMPONENTS)
