@@ -284,11 +284,7 @@ MeshCheckReport check_mesh(const Mesh& mesh, const MeshCheckOptions& options) {
     }
     const Vector3d &a = P[t[0]], &b = P[t[1]], &c = P[t[2]];
     if ((b - a).cross(c - a).squaredNorm() == 0) ++r.degenerate_faces;
-    auto angle = [](const Vector3d& p, const Vector3d& x, const Vector3d& y) {
-      const double d = (x - p).norm() * (y - p).norm();
-      return d > 0 ? std::acos(std::clamp((x - p).dot(y - p) / d, -1.0, 1.0)) * 180.0 / kPi : 0.0;
-    };
-    const double m = std::min({angle(a, b, c), angle(b, c, a), angle(c, a, b)});
+    const double m = triangle_min_angle(a, b, c) * 180.0 / kPi;
     const double q = radius_ratio(a, b, c);
     r.min_angle_deg = std::min(r.min_angle_deg, m);
     r.min_radius_ratio = std::min(r.min_radius_ratio, q);
