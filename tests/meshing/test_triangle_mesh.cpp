@@ -213,6 +213,12 @@ TEST(KernelTriangleMesh, ConstructionRefusesBadTriangles) {
   const std::vector<std::array<int, 3>> repeated{{0, 1, 1}}, out_of_range{{0, 1, 3}};
   EXPECT_THROW(TriangleMesh(p, repeated), InvalidInputError);
   EXPECT_THROW(TriangleMesh(p, out_of_range), InvalidInputError);
+  try {
+    TriangleMesh(p, repeated, "remesh");
+    ADD_FAILURE() << "a repeated corner was accepted";
+  } catch (const InvalidInputError& e) {
+    EXPECT_STREQ(e.what(), "remesh: triangle 0 repeats a corner");  // says who read it
+  }
   const std::vector<std::array<int, 3>> one{{0, 1, 2}};
   const TriangleMesh m(std::vector<Vector3d>{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {5, 5, 5}}, one);
   EXPECT_EQ(m.vertex_count(), 3);  // the vertex in no triangle is not live

@@ -1428,7 +1428,6 @@ std::vector<Vector3d> estimate_fan_normals(const std::vector<Vector3d>& input,
 
 namespace {
 
-// `perm`: the points' cell order (cell_order), computed here when empty.
 // Steps 1-6, 7c: one fan per point, independent of the others, so they run in parallel and
 // the result does not depend on the thread count.
 std::vector<std::vector<FanEntry>> build_all_fans(const Context& ctx, const FanOptions& options,
@@ -1575,6 +1574,7 @@ void write_mesh(const Assembly& as, const std::vector<Vector3d>& input,
   result.stats.unused_points = static_cast<std::size_t>(std::count(used.begin(), used.end(), 0));
 }
 
+// `perm`: the points' cell order (cell_order), computed here when empty.
 FanResult build_fans_distinct(const std::vector<Vector3d>& input, const FanOptions& options,
                               const std::vector<Eigen::Vector3f>* given_normals,
                               std::vector<int> perm = {}) {

@@ -10,12 +10,13 @@
 
 namespace scanmesh::kernel {
 
-TriangleMesh::TriangleMesh(const Mesh& mesh) : TriangleMesh(mesh.positions, mesh.triangles) {
+TriangleMesh::TriangleMesh(const Mesh& mesh, const char* context)
+    : TriangleMesh(mesh.positions, mesh.triangles, context) {
   if (mesh.has_face_labels()) label = mesh.face_labels;
 }
 
 TriangleMesh::TriangleMesh(std::vector<Eigen::Vector3d> positions,
-                           std::span<const std::array<int, 3>> triangles) {
+                           std::span<const std::array<int, 3>> triangles, const char* context) {
   const int n = static_cast<int>(positions.size());
   pos = std::move(positions);
   vfaces.assign(n, {});
@@ -26,10 +27,11 @@ TriangleMesh::TriangleMesh(std::vector<Eigen::Vector3d> positions,
     const auto& t = triangles[f];
     for (int c : t)
       if (c < 0 || c >= n)
-        throw InvalidInputError("triangle " + std::to_string(f) +
+        throw InvalidInputError(std::string(context) + ": triangle " + std::to_string(f) +
                                 " has a vertex index out of range");
     if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
-      throw InvalidInputError("triangle " + std::to_string(f) + " repeats a corner");
+      throw InvalidInputError(std::string(context) + ": triangle " + std::to_string(f) +
+                              " repeats a corner");
     add_face(t[0], t[1], t[2], 0);
   }
   // A vertex in no triangle (an OBJ's unused vertex) is not part of the surface: alive it would

@@ -98,7 +98,8 @@ struct VState {
 
 class Remesher {
  public:
-  Remesher(const Mesh& input, const RemeshOptions& o) : o_(o), input_(input), m0_(input) {}
+  Remesher(const Mesh& input, const RemeshOptions& o)
+      : o_(o), input_(input), m0_(input, "remesh") {}
 
   RemeshResult run();
 

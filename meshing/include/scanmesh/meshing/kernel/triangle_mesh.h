@@ -78,11 +78,11 @@ class TriangleMesh {
   TriangleMesh() = default;
   //! Copies positions, triangles and labels (label 0 when the mesh has none); vertices in no
   //! triangle are kept in `pos` but not live. Throws InvalidInputError for bad indices or
-  //! triangles with a repeated corner.
-  explicit TriangleMesh(const Mesh& mesh);
+  //! triangles with a repeated corner, the message starting with `context` (e.g. "remesh").
+  explicit TriangleMesh(const Mesh& mesh, const char* context = "mesh");
   //! The same from positions and triangles alone (every label 0).
   TriangleMesh(std::vector<Eigen::Vector3d> positions,
-               std::span<const std::array<int, 3>> triangles);
+               std::span<const std::array<int, 3>> triangles, const char* context = "mesh");
 
   std::vector<Eigen::Vector3d> pos;
   std::vector<std::array<int, 3>> tri;
