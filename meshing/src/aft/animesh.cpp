@@ -107,7 +107,7 @@ class FlipPass {
     return q;
   }
   void flip(const kernel::EdgeQuad& q) {
-    mesh_.flip(q.v, q.w);
+    mesh_.flip(q);
     // The new faces start at the corners the animation meshes' flips have always started them
     // from (put_first says why).
     mesh_.put_first(q.f1, q.a);

@@ -169,9 +169,13 @@ std::optional<EdgeQuad> TriangleMesh::quad(int v, int w) const {
 std::optional<EdgeQuad> TriangleMesh::flip(int v, int w) {
   const auto q = quad(v, w);
   if (!q || edge_face_count(q->a, q->b) > 0) return std::nullopt;
-  replace_corner(q->f1, w, q->b);  // (v, b, a)
-  replace_corner(q->f2, v, q->a);  // (w, a, b)
+  flip(*q);
   return q;
+}
+
+void TriangleMesh::flip(const EdgeQuad& q) {
+  replace_corner(q.f1, q.w, q.b);  // (v, b, a)
+  replace_corner(q.f2, q.v, q.a);  // (w, a, b)
 }
 
 void TriangleMesh::undo(const EdgeQuad& flipped) {
@@ -197,8 +201,8 @@ void TriangleMesh::undo(const EdgeSplit& split) {
   for (int f : split.changed) replace_corner(f, split.u, split.w);
 }
 
-bool TriangleMesh::link_condition(int v, int w, const EdgeFaceList& star, const NeighbourList& nv,
-                                  const NeighbourList& nw) const {
+bool TriangleMesh::link_condition(int v, int w, std::span<const int> star, std::span<const int> nv,
+                                  std::span<const int> nw) const {
   for (int x : nv) {
     if (x == w || std::find(nw.begin(), nw.end(), x) == nw.end()) continue;
     const bool opposite_corner =

@@ -237,9 +237,8 @@ struct SpringNetwork::Impl {
     if (c == d) return false;
     // Link condition (not in the report, needed for a manifold result): the common neighbours
     // of a and b are exactly the two opposite vertices (the one, for a border edge).
-    if (!mesh.link_condition(a, b, mesh.edge_faces(a, b), mesh.neighbours(a), mesh.neighbours(b)))
-      return false;
     const auto na = neighbors(a), nb = neighbors(b);
+    if (!mesh.link_condition(a, b, ef, na, nb)) return false;
     if (valence(c) <= 3 || (d >= 0 && valence(d) <= 3)) return false;
     if (na.size() + nb.size() - 2 - ef.size() < 3) return false;  // merged valence
     // A border particle that swallowed its border neighbours again and again would collect a
@@ -352,7 +351,7 @@ struct SpringNetwork::Impl {
     if (min_new < std::min(min_old, 10.0 * std::numbers::pi / 180.0)) return false;
     const double rest =
         0.25 * (spring(a, c).rest + spring(b, c).rest + spring(a, d).rest + spring(b, d).rest);
-    if (!mesh.flip(a, b)) return false;
+    mesh.flip(kernel::EdgeQuad{ef[0], ef[1], a, b, c, d});  // (a, b, c), (b, a, d) as tested
     mesh.put_first(ef[0], a);  // t0, started where the network's flips always started it
     mesh.put_first(ef[1], b);  // t1 (put_first says why)
     springs.erase(edge_key(a, b));

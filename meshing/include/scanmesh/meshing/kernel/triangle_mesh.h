@@ -134,6 +134,10 @@ class TriangleMesh {
   //! keeping the slots of the corners it keeps. nullopt, and nothing changed, when v-w has no
   //! quad or a-b is an edge already (a flip would duplicate it).
   std::optional<EdgeQuad> flip(int v, int w);
+  //! The same flip of a quad the caller already has (from quad(), with no change of these
+  //! faces since, and a-b not an edge): callers that test the quad before flipping do not
+  //! look it up twice.
+  void flip(const EdgeQuad& q);
   void undo(const EdgeQuad& flipped);
 
   //! Splits v-w at u (a vertex the caller added, with no faces yet); every face of the edge is
@@ -144,9 +148,10 @@ class TriangleMesh {
 
   //! The generalised link condition for collapsing v-w (Dey, Edelsbrunner, Guha, Nekhayev 1999,
   //! for non-manifold edges): every common neighbour of v and w is the opposite corner of a face
-  //! of the edge. `nv`, `nw` are v's and w's neighbours and `star` the edge's faces.
-  bool link_condition(int v, int w, const EdgeFaceList& star, const NeighbourList& nv,
-                      const NeighbourList& nw) const;
+  //! of the edge. `nv`, `nw` are v's and w's neighbours and `star` the edge's faces, in any
+  //! order (the callers have them already: edge_faces / neighbours lists or sorted vectors).
+  bool link_condition(int v, int w, std::span<const int> star, std::span<const int> nv,
+                      std::span<const int> nw) const;
   //! Merges v into w: the faces of v-w are removed and v's other faces get w instead. v keeps no
   //! faces and stays live until the caller, keeping the collapse, removes it (remove_vertex).
   EdgeCollapse collapse(int v, int w);
