@@ -7,6 +7,8 @@
 
 #include "scanmesh/meshing/edge_key.h"
 
+#include "kernel/vertex_components.h"
+
 namespace scanmesh {
 
 namespace {
@@ -48,17 +50,11 @@ void count_loops(const std::vector<std::pair<int, int>>& boundary, TopologyStats
 // Faces joined through shared vertices (union-find over the vertices); a component touching
 // another only at a vertex counts once, as the Euler formula of a pinched surface needs.
 std::size_t count_components(const Mesh& mesh, const std::vector<bool>& referenced) {
-  std::vector<int> parent(mesh.positions.size());
-  for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = static_cast<int>(i);
-  auto find = [&](int i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  };
-  for (const auto& t : mesh.triangles)
-    for (int k = 1; k < 3; ++k) parent[find(t[k])] = find(t[0]);
+  kernel::VertexComponents components(mesh.positions.size());
+  for (const auto& t : mesh.triangles) components.join(t);
   std::size_t roots = 0;
-  for (std::size_t i = 0; i < parent.size(); ++i)
-    if (referenced[i] && find(static_cast<int>(i)) == static_cast<int>(i)) ++roots;
+  for (std::size_t i = 0; i < referenced.size(); ++i)
+    if (referenced[i] && components.root(static_cast<int>(i)) == static_cast<int>(i)) ++roots;
   return roots;
 }
 

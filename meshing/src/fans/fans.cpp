@@ -21,7 +21,9 @@
 #include <vector>
 
 #include "../kernel/point_grid.h"
+#include "../kernel/vertex_components.h"
 #include "scanmesh/core/errors.h"
+#include "scanmesh/core/triangle_quality.h"
 #include "scanmesh/meshing/mesh_check.h"
 
 namespace scanmesh {
@@ -999,9 +1001,7 @@ std::size_t flip_to_delaunay(Assembly& as, const std::vector<Vector3d>& pts, int
     const Vector3d u = pts[x] - pts[o], v = pts[y] - pts[o];
     return std::atan2(u.cross(v).norm(), u.dot(v));
   };
-  auto min_angle = [&](int a, int b, int c) {
-    return std::min({angle_at(a, b, c), angle_at(b, c, a), angle_at(c, a, b)});
-  };
+  auto min_angle = [&](int a, int b, int c) { return triangle_min_angle(pts[a], pts[b], pts[c]); };
   auto unit_normal = [&](int a, int b, int c) {
     return (pts[b] - pts[a]).cross(pts[c] - pts[a]).normalized();
   };
@@ -1075,11 +1075,7 @@ std::size_t fill_loop_max_min_angle(Assembly& as, const std::vector<Vector3d>& p
                                     const std::vector<int>& loop, double max_edge) {
   const int m = static_cast<int>(loop.size());
   auto min_angle = [&](int a, int b, int c) {
-    const Vector3d &A = pts[loop[a]], &B = pts[loop[b]], &C = pts[loop[c]];
-    auto ang = [](const Vector3d& o, const Vector3d& x, const Vector3d& y) {
-      return std::atan2((x - o).cross(y - o).norm(), (x - o).dot(y - o));
-    };
-    return std::min({ang(A, B, C), ang(B, C, A), ang(C, A, B)});
+    return triangle_min_angle(pts[loop[a]], pts[loop[b]], pts[loop[c]]);
   };
   // best[i][j]: the largest smallest angle of a triangulation of loop[i..j] (j > i + 1); a
   // chord that is already an edge of the mesh elsewhere is forbidden (it would get 3 faces).
@@ -1307,14 +1303,8 @@ std::size_t insert_unused(Assembly& as, const Context& ctx) {
 void orient_components_by_normals(std::vector<std::array<int, 3>>& faces,
                                   const std::vector<Vector3d>& pts,
                                   const std::vector<Vector3d>& normals, int threads) {
-  std::vector<int> parent(pts.size());
-  for (std::size_t i = 0; i < parent.size(); ++i) parent[i] = static_cast<int>(i);
-  auto find = [&](int i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  };
-  for (const auto& t : faces)
-    for (int k = 1; k < 3; ++k) parent[find(t[k])] = find(t[0]);
+  kernel::VertexComponents components(pts.size());
+  for (const auto& t : faces) components.join(t);
   // Each face's vote in parallel, summed in face order (the same sums as one loop).
   std::vector<double> vote(faces.size());
   const auto nf = static_cast<std::ptrdiff_t>(faces.size());
@@ -1325,9 +1315,9 @@ void orient_components_by_normals(std::vector<std::array<int, 3>>& faces,
     vote[f] = fn.dot(normals[t[0]] + normals[t[1]] + normals[t[2]]);
   }
   std::vector<double> agreement(pts.size(), 0.0);
-  for (std::size_t f = 0; f < faces.size(); ++f) agreement[find(faces[f][0])] += vote[f];
+  for (std::size_t f = 0; f < faces.size(); ++f) agreement[components.root(faces[f][0])] += vote[f];
   for (auto& t : faces)
-    if (agreement[find(t[0])] < 0) std::swap(t[1], t[2]);
+    if (agreement[components.root(t[0])] < 0) std::swap(t[1], t[2]);
 }
 
 // Limit (docs/fans.md, "Limits"): every neighbour query in a cell reads all of its points, so a

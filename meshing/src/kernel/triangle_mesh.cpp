@@ -287,4 +287,34 @@ Mesh TriangleMesh::to_mesh(std::vector<int>* old_to_new) const {
   return m;
 }
 
+std::vector<int> faces_off_largest_wedge(std::span<const std::array<int, 3>> tri,
+                                         std::span<const int> star, int v) {
+  auto share_edge_at_v = [&](int f, int g) {
+    for (int a : tri[f])
+      if (a != v && (tri[g][0] == a || tri[g][1] == a || tri[g][2] == a)) return true;
+    return false;
+  };
+  std::vector<int> wedge(star.size(), -1), size;
+  for (std::size_t s0 = 0; s0 < star.size(); ++s0) {
+    if (wedge[s0] >= 0) continue;  // depth-first from each face not in a wedge yet
+    const int w = static_cast<int>(size.size());
+    size.push_back(0);
+    std::vector<std::size_t> stack{s0};
+    wedge[s0] = w;
+    while (!stack.empty()) {
+      const std::size_t s = stack.back();
+      stack.pop_back();
+      ++size[w];
+      for (std::size_t t = 0; t < star.size(); ++t)
+        if (wedge[t] < 0 && share_edge_at_v(star[s], star[t])) wedge[t] = w, stack.push_back(t);
+    }
+  }
+  std::vector<int> off;
+  if (size.size() < 2) return off;
+  const int keep = static_cast<int>(std::max_element(size.begin(), size.end()) - size.begin());
+  for (std::size_t s = 0; s < star.size(); ++s)
+    if (wedge[s] != keep) off.push_back(star[s]);
+  return off;
+}
+
 }  // namespace scanmesh::kernel

@@ -172,6 +172,13 @@ class TriangleMesh {
   mutable std::vector<int> valence_cache_;  // per vertex, -1: not known
 };
 
+//! The faces of `star` (faces with corner v, in any order) outside its largest wedge: faces are
+//! in one wedge when joined, through faces of `star`, across edges that end at v. Several
+//! wedges make v a pinch (a bow-tie); the first largest is kept, the others' faces are returned
+//! in `star` order (empty for a manifold vertex).
+std::vector<int> faces_off_largest_wedge(std::span<const std::array<int, 3>> tri,
+                                         std::span<const int> star, int v);
+
 // The adjacency queries are inline: the remesher asks for them millions of times per run
 // from another translation unit.
 
