@@ -106,9 +106,66 @@ double patch_kappa_max(const TriangleMesh& m, const std::vector<Vec3>& normal,
   return graph_kappa_max(q(0), q(1), q(2), q(3), q(4));
 }
 
+// Per vertex: the sum of its live faces' (p1 - p0) x (p2 - p0), an area-weighted normal that is
+// not normalised (zero where the faces cancel or there are none).
+std::vector<Vec3> area_weighted_normals(const TriangleMesh& m) {
+  std::vector<Vec3> normal(m.pos.size(), Vec3::Zero());
+  for (std::size_t f = 0; f < m.tri.size(); ++f) {
+    if (!m.face_alive[f]) continue;
+    const auto& t = m.tri[f];
+    const Vec3 nf = (m.pos[t[1]] - m.pos[t[0]]).cross(m.pos[t[2]] - m.pos[t[0]]);
+    for (int c : t) normal[c] += nf;
+  }
+  return normal;
+}
+
 // kappa_max of the least-squares quadric over each vertex's 2-ring (of the vertices flagged in
 // `only`, when given; the others get 0).
-std::vector<double> kappa_on_rings(const TriangleMesh& m, const std::vector<char>* only);
+std::vector<double> kappa_on_rings(const TriangleMesh& m, const std::vector<char>* only) {
+  const int n = static_cast<int>(m.pos.size());
+  std::vector<double> kappa(n, 0.0);
+  const std::vector<Vec3> normal = area_weighted_normals(m);
+  std::vector<int> ring, mark(n, -1);
+#pragma omp parallel for schedule(dynamic, 256) private(ring) firstprivate(mark)
+  for (int v = 0; v < n; ++v) {
+    if ((only && !(*only)[v]) || m.vfaces[v].empty() || normal[v].norm() == 0) continue;
+    // 2-ring.
+    ring.clear();
+    mark[v] = v;
+    for (int f : m.vfaces[v])
+      for (int c : m.tri[f])
+        if (mark[c] != v) {
+          mark[c] = v;
+          ring.push_back(c);
+        }
+    const std::size_t first = ring.size();
+    for (std::size_t i = 0; i < first; ++i)
+      for (int f : m.vfaces[ring[i]])
+        for (int c : m.tri[f])
+          if (mark[c] != v) {
+            mark[c] = v;
+            ring.push_back(c);
+          }
+    if (ring.size() < 5) continue;
+    const Eigen::Vector3d nz = normal[v].normalized();
+    Eigen::Vector3d ax =
+        std::abs(nz.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    const Eigen::Vector3d ex = (ax - ax.dot(nz) * nz).normalized();
+    const Eigen::Vector3d ey = nz.cross(ex);
+    // z = a x^2 + b xy + c y^2 + d x + e y (through the vertex).
+    Eigen::MatrixXd A(ring.size(), 5);
+    Eigen::VectorXd rhs(ring.size());
+    for (std::size_t i = 0; i < ring.size(); ++i) {
+      const Eigen::Vector3d d = m.pos[ring[i]] - m.pos[v];
+      const double x = d.dot(ex), y = d.dot(ey);
+      A.row(static_cast<Eigen::Index>(i)) << x * x, x * y, y * y, x, y;
+      rhs(static_cast<Eigen::Index>(i)) = d.dot(nz);
+    }
+    const Eigen::VectorXd q = A.colPivHouseholderQr().solve(rhs);
+    kappa[v] = graph_kappa_max(q(0), q(1), q(2), q(3), q(4));
+  }
+  return kappa;
+}
 
 double median_edge_length(const TriangleMesh& m) {
   std::vector<double> len;
@@ -121,13 +178,7 @@ double median_edge_length(const TriangleMesh& m) {
 
 std::vector<double> kappa_at_scale(const TriangleMesh& m, double radius) {
   const int n = static_cast<int>(m.pos.size());
-  std::vector<Vec3> normal(n, Vec3::Zero());
-  for (std::size_t f = 0; f < m.tri.size(); ++f) {
-    if (!m.face_alive[f]) continue;
-    const auto& t = m.tri[f];
-    const Vec3 nf = (m.pos[t[1]] - m.pos[t[0]]).cross(m.pos[t[2]] - m.pos[t[0]]);
-    for (int c : t) normal[c] += nf;
-  }
+  std::vector<Vec3> normal = area_weighted_normals(m);
   for (Vec3& x : normal)
     if (x.norm() > 0) x.normalize();
   const Adjacency adj(m);
@@ -178,58 +229,6 @@ std::vector<double> kappa_at_scale(const TriangleMesh& m, double radius) {
     const std::vector<double> ring = kappa_on_rings(m, &gap);
     for (int v = 0; v < n; ++v)
       if (gap[v]) kappa[v] = ring[v];
-  }
-  return kappa;
-}
-
-std::vector<double> kappa_on_rings(const TriangleMesh& m, const std::vector<char>* only) {
-  const int n = static_cast<int>(m.pos.size());
-  std::vector<double> kappa(n, 0.0);
-  std::vector<Eigen::Vector3d> normal(n, Eigen::Vector3d::Zero());
-  for (std::size_t f = 0; f < m.tri.size(); ++f) {
-    if (!m.face_alive[f]) continue;
-    const auto& t = m.tri[f];
-    const Eigen::Vector3d nf = (m.pos[t[1]] - m.pos[t[0]]).cross(m.pos[t[2]] - m.pos[t[0]]);
-    for (int c : t) normal[c] += nf;
-  }
-  std::vector<int> ring, mark(n, -1);
-#pragma omp parallel for schedule(dynamic, 256) private(ring) firstprivate(mark)
-  for (int v = 0; v < n; ++v) {
-    if ((only && !(*only)[v]) || m.vfaces[v].empty() || normal[v].norm() == 0) continue;
-    // 2-ring.
-    ring.clear();
-    mark[v] = v;
-    for (int f : m.vfaces[v])
-      for (int c : m.tri[f])
-        if (mark[c] != v) {
-          mark[c] = v;
-          ring.push_back(c);
-        }
-    const std::size_t first = ring.size();
-    for (std::size_t i = 0; i < first; ++i)
-      for (int f : m.vfaces[ring[i]])
-        for (int c : m.tri[f])
-          if (mark[c] != v) {
-            mark[c] = v;
-            ring.push_back(c);
-          }
-    if (ring.size() < 5) continue;
-    const Eigen::Vector3d nz = normal[v].normalized();
-    Eigen::Vector3d ax =
-        std::abs(nz.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
-    const Eigen::Vector3d ex = (ax - ax.dot(nz) * nz).normalized();
-    const Eigen::Vector3d ey = nz.cross(ex);
-    // z = a x^2 + b xy + c y^2 + d x + e y (through the vertex).
-    Eigen::MatrixXd A(ring.size(), 5);
-    Eigen::VectorXd rhs(ring.size());
-    for (std::size_t i = 0; i < ring.size(); ++i) {
-      const Eigen::Vector3d d = m.pos[ring[i]] - m.pos[v];
-      const double x = d.dot(ex), y = d.dot(ey);
-      A.row(static_cast<Eigen::Index>(i)) << x * x, x * y, y * y, x, y;
-      rhs(static_cast<Eigen::Index>(i)) = d.dot(nz);
-    }
-    const Eigen::VectorXd q = A.colPivHouseholderQr().solve(rhs);
-    kappa[v] = graph_kappa_max(q(0), q(1), q(2), q(3), q(4));
   }
   return kappa;
 }

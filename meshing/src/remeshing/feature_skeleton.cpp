@@ -4,7 +4,6 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <numbers>
 #include <set>
 #include <sstream>
@@ -314,7 +313,6 @@ void trace_segments(const TriangleMesh& m, const SkeletonAdjacency& sadj, Featur
   for (int v = 0; v < nv; ++v) {
     if (sk.kind[v] != VertexKind::Skeleton || sk.vertex_segment[v] >= 0) continue;
     sk.kind[v] = VertexKind::Branch;  // closed loop without a branch vertex
-    sk.vertex_segment[v] = -1;
     trace(v, std::min(sadj[v][0], sadj[v][1]));
   }
 }

@@ -274,17 +274,6 @@ class Patch {
 
 }  // namespace
 
-// Loop edges i -> i + 1 and a new centre vertex n.
-std::vector<Tri> centroid_fan(std::vector<Vec3>& pts) {
-  const int n = static_cast<int>(pts.size());
-  Vec3 c = Vec3::Zero();
-  for (const Vec3& p : pts) c += p;
-  pts.push_back(c / n);
-  std::vector<Tri> out;
-  for (int i = 0; i < n; ++i) out.push_back({i, (i + 1) % n, n});
-  return out;
-}
-
 HolePatch fill_hole(const std::vector<Vec3>& loop, const std::function<bool(int, int)>& joined) {
   const int n = static_cast<int>(loop.size());
   if (n < 3) return {};
@@ -315,11 +304,10 @@ HolePatch fill_hole(const std::vector<Vec3>& loop, const std::function<bool(int,
   if (start.empty()) {
     // The loop folds over its plane (or every triangulation needs a joined chord): the centroid
     // fan, unrefined, as before this patch existed.
-    std::vector<Vec3> pts = loop;
+    // Loop edges i -> i + 1 traversed backwards, to a new vertex n at the centre.
     HolePatch fan;
-    fan.triangles = centroid_fan(pts);
-    fan.new_points = {pts.back()};
-    for (Tri& t : fan.triangles) t = {t[2], t[1], t[0]};
+    fan.new_points = {centre};
+    for (int i = 0; i < n; ++i) fan.triangles.push_back({n, (i + 1) % n, i});
     return fan;
   }
   double mean_edge = 0;

@@ -9,7 +9,9 @@
 #include <cstdint>
 #include <unordered_map>
 
+#include "../kernel/vertex_components.h"
 #include "hole_filling.h"
+#include "scanmesh/meshing/kernel/triangle_mesh.h"
 #include "scanmesh/meshing/mesh_topology.h"
 #include "scanmesh/meshing/remeshing/remesh.h"
 
@@ -18,6 +20,29 @@ namespace scanmesh::remeshing {
 namespace {
 
 using Vec3 = Eigen::Vector3d;
+
+// The faces with keep[f] set, their vertices renumbered in the order of first use, with their
+// labels (0 where `labels` is empty).
+Mesh kept_faces(const std::vector<Vec3>& pos, const std::vector<std::array<int, 3>>& tri,
+                const std::vector<char>& keep, const std::vector<int>& labels) {
+  Mesh out;
+  std::vector<int> map(pos.size(), -1);
+  for (std::size_t f = 0; f < tri.size(); ++f) {
+    if (!keep[f]) continue;
+    std::array<int, 3> t{};
+    for (int i = 0; i < 3; ++i) {
+      int& m = map[tri[f][i]];
+      if (m < 0) {
+        m = static_cast<int>(out.positions.size());
+        out.positions.push_back(pos[tri[f][i]]);
+      }
+      t[i] = m;
+    }
+    out.triangles.push_back(t);
+    out.face_labels.push_back(labels.empty() ? 0 : labels[f]);
+  }
+  return out;
+}
 
 // Face soup with per-vertex face lists for local repairs; removed faces are marked dead.
 class Surface {
@@ -150,7 +175,10 @@ class Surface {
     out.erase(std::unique(out.begin(), out.end()), out.end());
     return out;
   }
-  double min_angle(int f, int* short_i = nullptr, double* max_angle = nullptr) const {
+  // The smallest corner angle of f; `short_i` gets its corner (the short edge is opposite it),
+  // `max_angle` and `max_i` the largest angle and its corner.
+  double min_angle(int f, int* short_i = nullptr, double* max_angle = nullptr,
+                   int* max_i = nullptr) const {
     const auto& t = tri[f];
     double mn = 10, mx = 0;
     for (int i = 0; i < 3; ++i) {
@@ -158,32 +186,15 @@ class Surface {
       const double a = std::atan2(e1.cross(e2).norm(), e1.dot(e2));
       if (a < mn) {
         mn = a;
-        if (short_i) *short_i = i;  // the short edge is opposite corner i
+        if (short_i) *short_i = i;
       }
+      if (a > mx && max_i) *max_i = i;
       mx = std::max(mx, a);
     }
     if (max_angle) *max_angle = mx;
     return mn;
   }
-  Mesh to_mesh() const {
-    Mesh out;
-    std::vector<int> map(pos.size(), -1);
-    for (std::size_t f = 0; f < tri.size(); ++f) {
-      if (!alive[f]) continue;
-      std::array<int, 3> t{};
-      for (int i = 0; i < 3; ++i) {
-        int& m = map[tri[f][i]];
-        if (m < 0) {
-          m = static_cast<int>(out.positions.size());
-          out.positions.push_back(pos[tri[f][i]]);
-        }
-        t[i] = m;
-      }
-      out.triangles.push_back(t);
-      out.face_labels.push_back(label[f]);
-    }
-    return out;
-  }
+  Mesh to_mesh() const { return kept_faces(pos, tri, alive, label); }
 
   std::vector<Vec3> pos;
   std::vector<std::array<int, 3>> tri;
@@ -209,17 +220,11 @@ void repair_needles(Surface& s, double max_angle_rad, PrepareStats& st) {
       ++st.degenerate_removed;
       continue;
     }
-    int i = 0;
+    int i = 0, ci = 0;
     double amax = 0;
-    if (s.min_angle(f, &i, &amax) >= max_angle_rad) continue;
+    if (s.min_angle(f, &i, &amax, &ci) >= max_angle_rad) continue;
     if (amax > 2 * std::numbers::pi / 3) {
-      // Cap: the longest edge is opposite the largest angle, corner c.
-      int ci = 0;
-      for (int k = 0; k < 3; ++k) {
-        const Vec3 e1 = s.pos[t[(k + 1) % 3]] - s.pos[t[k]],
-                   e2 = s.pos[t[(k + 2) % 3]] - s.pos[t[k]];
-        if (std::atan2(e1.cross(e2).norm(), e1.dot(e2)) >= amax - 1e-15) ci = k;
-      }
+      // Cap: the longest edge is opposite the largest angle, corner c (one angle > 120 deg).
       const int c = t[ci], a = t[(ci + 1) % 3], b = t[(ci + 2) % 3];  // f = (c, a, b)
       const auto ef = s.edge_faces(a, b);
       if (ef.size() == 1) {
@@ -461,39 +466,12 @@ void remove_spikes(Surface& s, double tip_reach, double tip_angle, PrepareStats&
       std::vector<int> fs;
       for (int f : s.vf[v])
         if (s.alive[f]) fs.push_back(f);
-      if (fs.size() < 2) continue;
       std::sort(fs.begin(), fs.end());
-      std::vector<int> comp(fs.size(), -1);
-      int nc = 0;
-      for (std::size_t k = 0; k < fs.size(); ++k) {
-        if (comp[k] >= 0) continue;
-        comp[k] = nc;
-        std::vector<std::size_t> stack = {k};
-        while (!stack.empty()) {
-          const std::size_t x = stack.back();
-          stack.pop_back();
-          for (std::size_t y = 0; y < fs.size(); ++y) {
-            if (comp[y] >= 0) continue;
-            int shared = 0;
-            for (int c : s.tri[fs[x]]) shared += c != v && Surface::has(s.tri[fs[y]], c);
-            if (shared > 0) {
-              comp[y] = nc;
-              stack.push_back(y);
-            }
-          }
-        }
-        ++nc;
+      for (int f : kernel::faces_off_largest_wedge(s.tri, fs, v)) {
+        s.kill(f);
+        ++st.pinch_faces_removed;
+        ++pinched;
       }
-      if (nc < 2) continue;
-      std::vector<int> size(nc, 0);
-      for (int c : comp) ++size[c];
-      const int keep = static_cast<int>(std::max_element(size.begin(), size.end()) - size.begin());
-      for (std::size_t k = 0; k < fs.size(); ++k)
-        if (comp[k] != keep) {
-          s.kill(fs[k]);
-          ++st.pinch_faces_removed;
-          ++pinched;
-        }
     }
     // Ears: faces with two or three boundary edges, until none is left.
     const std::vector<int> ear_candidates = round == 0 ? all_faces : s.faces_near_killed(ear_seen);
@@ -531,9 +509,7 @@ double triangle_area(const Mesh& m, const std::array<int, 3>& t) {
 }  // namespace
 
 double uniform_edge_length(const Mesh& mesh, int vertices) {
-  double area = 0;
-  for (const auto& t : mesh.triangles) area += triangle_area(mesh, t);
-  return std::sqrt(area / (std::sqrt(3.0) / 2 * std::max(vertices, 1)));
+  return std::sqrt(surface_area(mesh) / (std::sqrt(3.0) / 2 * std::max(vertices, 1)));
 }
 
 bool looks_like_scan(const TopologyStats& ts) {
@@ -577,30 +553,21 @@ Mesh prepare_input(const Mesh& original, const PrepareOptions& o, PrepareStats* 
     if (repeats[f]) keep[f] = 0, ++st.repeated_faces_removed;
   if (o.min_component_faces > 0 || o.min_component_area > 0) {
     // Components by shared vertices (union-find).
-    std::vector<int> parent(nv);
-    for (int i = 0; i < nv; ++i) parent[i] = i;
-    auto find = [&](int i) {
-      while (parent[i] != i) i = parent[i] = parent[parent[i]];
-      return i;
-    };
-    for (int f = 0; f < nf; ++f) {
-      if (!keep[f]) continue;
-      const auto& t = in.triangles[f];
-      parent[find(t[1])] = find(t[0]);
-      parent[find(t[2])] = find(t[0]);
-    }
+    kernel::VertexComponents components(nv);
+    for (int f = 0; f < nf; ++f)
+      if (keep[f]) components.join(in.triangles[f]);
     std::unordered_map<int, int> size;
     std::unordered_map<int, double> area;
     for (int f = 0; f < nf; ++f) {
       if (!keep[f]) continue;
-      const int r = find(in.triangles[f][0]);
+      const int r = components.root(in.triangles[f][0]);
       ++size[r];
       area[r] += triangle_area(in, in.triangles[f]);
     }
     std::unordered_map<int, char> counted;
     for (int f = 0; f < nf; ++f) {
       if (!keep[f]) continue;
-      const int r = find(in.triangles[f][0]);
+      const int r = components.root(in.triangles[f][0]);
       if (size[r] < o.min_component_faces || area[r] < o.min_component_area) {
         keep[f] = 0;
         ++st.faces_removed;
@@ -611,22 +578,7 @@ Mesh prepare_input(const Mesh& original, const PrepareOptions& o, PrepareStats* 
       }
     }
   }
-  Mesh out;
-  std::vector<int> map(nv, -1);
-  for (int f = 0; f < nf; ++f) {
-    if (!keep[f]) continue;
-    std::array<int, 3> t{};
-    for (int i = 0; i < 3; ++i) {
-      int& m = map[in.triangles[f][i]];
-      if (m < 0) {
-        m = static_cast<int>(out.positions.size());
-        out.positions.push_back(in.positions[in.triangles[f][i]]);
-      }
-      t[i] = m;
-    }
-    out.triangles.push_back(t);
-    out.face_labels.push_back(in.has_face_labels() ? in.face_labels[f] : 0);
-  }
+  Mesh out = kept_faces(in.positions, in.triangles, keep, in.face_labels);
   if (o.max_hole_edges > 0 || o.max_hole_perimeter > 0) {
     const int longest_walk =
         std::max(o.max_hole_edges, o.max_hole_perimeter > 0 ? kMaxHolePatchEdges : 0);

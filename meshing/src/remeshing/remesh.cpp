@@ -335,6 +335,7 @@ class Remesher {
   void polish_angles();
   //! Up to `rounds` rounds of star moves and angle flips over the faces with a min angle below
   //! `limit` (rad); returns how many are left.
+  std::vector<int> faces_below(double limit) const;  // live faces, min angle under limit
   std::size_t polish_below(double limit, int rounds);
   void report(const std::string& phase, double f) const {
     if (o_.progress) o_.progress(phase, f);
@@ -396,10 +397,7 @@ class Remesher {
 void Remesher::build_input() {
   // Mean edge length of a uniform mesh with the requested vertex count: F ~ 2 V faces of
   // area sqrt(3)/4 h^2. The scale of the kink rule and of the curvature fit.
-  double area = 0;
-  for (std::size_t f = 0; f < m0_.tri.size(); ++f)
-    if (m0_.face_alive[f]) area += m0_.face_area(static_cast<int>(f));
-  const double uniform_edge = std::sqrt(area / (std::sqrt(3.0) / 2 * o_.target_vertices));
+  const double uniform_edge = uniform_edge_length(input_, o_.target_vertices);
   uniform_edge_ = uniform_edge;
   SkeletonOptions so = o_.skeleton;
   if (so.kink_reach_mm <= 0) so.kink_reach_mm = uniform_edge;
@@ -994,7 +992,6 @@ bool Remesher::drive(int b, int w, int side) {
     b = x;
     w = y;
   }
-  if (total < 0) return true;
   // Undone by flipping the new edges back: the same triangles, though the two faces of each
   // flip may hold each other's; the same mesh as long as both have one patch and label (a
   // flipped edge is no skeleton edge, so they do; checked all the same).
@@ -1590,7 +1587,6 @@ void Remesher::regularize() {
   // followed by flips of the new link), one local angle-smoothing step after each operation.
   simple_flips();
   const auto es = m_.edges();
-  int changed = 0;
   for (auto k : es) {
     const int v = edge_key_first(k), w = edge_key_second(k);
     if (!m_.vertex_alive[v] || !m_.vertex_alive[w] || is_skel(v, w)) continue;
@@ -1601,16 +1597,12 @@ void Remesher::regularize() {
     if (dv < 0 && dw < 0) {  // short edge: both black
       const int a = m_.opposite(ef[0], v, w), b = m_.opposite(ef[1], v, w);
       if (deviation(a, ef[0]) <= 0 || deviation(b, ef[1]) <= 0) continue;
-      if (collapse(v, w)) ++changed;
+      collapse(v, w);
     } else if (dv > 0 && dw > 0) {  // long edge: both white
-      const int u = split(v, w);
-      if (u < 0) continue;
-      ++changed;
-      flips_around(u, Spokes::Excluded);
+      if (const int u = split(v, w); u >= 0) flips_around(u, Spokes::Excluded);
     }
   }
   drive_dipoles();
-  (void)changed;
 }
 
 std::vector<std::uint64_t> Remesher::edges_after_flips(
@@ -1779,14 +1771,15 @@ bool Remesher::flip_raises_min_angle(int v, int w) {
   return false;
 }
 
+std::vector<int> Remesher::faces_below(double limit) const {
+  std::vector<int> bad;
+  for (int f = 0; f < static_cast<int>(m_.tri.size()); ++f)
+    if (m_.face_alive[f] && face_min_angle(f) < limit) bad.push_back(f);
+  return bad;
+}
+
 std::size_t Remesher::polish_below(double limit, int rounds) {
-  auto bad_faces = [&] {
-    std::vector<int> bad;
-    for (int f = 0; f < static_cast<int>(m_.tri.size()); ++f)
-      if (m_.face_alive[f] && face_min_angle(f) < limit) bad.push_back(f);
-    return bad;
-  };
-  std::vector<int> bad = bad_faces();
+  std::vector<int> bad = faces_below(limit);
   for (int round = 0; round < rounds && !bad.empty(); ++round) {
     report("polish", static_cast<double>(round) / rounds);
     for (int f : bad) {
@@ -1803,16 +1796,14 @@ std::size_t Remesher::polish_below(double limit, int rounds) {
           break;
         }
     }
-    bad = bad_faces();
+    bad = faces_below(limit);
   }
   return bad.size();
 }
 
 void Remesher::polish_angles() {
   const double limit = o_.polish_angle_deg * std::numbers::pi / 180;
-  st_.polish_bad_before = 0;
-  for (int f = 0; f < static_cast<int>(m_.tri.size()); ++f)
-    st_.polish_bad_before += m_.face_alive[f] && face_min_angle(f) < limit;
+  st_.polish_bad_before = faces_below(limit).size();
   st_.polish_bad_after = polish_below(limit, o_.polish_rounds);
   // The floor: a face under polish_floor_deg is worse for every use of the mesh than a normal
   // a little past E_glatt / E_dist. On creases finer than the output (a lion's mane at the
@@ -1837,9 +1828,7 @@ void Remesher::polish_angles() {
   }
   cos_glatt_ = keep_glatt;
   cos_dist_ = keep_dist;
-  st_.polish_bad_after = 0;
-  for (int f = 0; f < static_cast<int>(m_.tri.size()); ++f)
-    st_.polish_bad_after += m_.face_alive[f] && face_min_angle(f) < limit;
+  st_.polish_bad_after = faces_below(limit).size();
 }
 
 void Remesher::repair_intersections() {
@@ -2055,21 +2044,17 @@ RemeshResult Remesher::result() {
 
 RemeshResult Remesher::run() {
   const auto t0 = std::chrono::steady_clock::now();
+  auto timed = [this](void (Remesher::*phase)(), double& seconds) {
+    const auto start = std::chrono::steady_clock::now();
+    (this->*phase)();
+    seconds = seconds_since(start);
+  };
   check_options();
-  set_up();
-  st_.seconds_setup = seconds_since(t0);
-  auto t1 = std::chrono::steady_clock::now();
-  adapt_phase();
-  st_.seconds_adapt = seconds_since(t1);
-  t1 = std::chrono::steady_clock::now();
-  area_phase();
-  st_.seconds_count = seconds_since(t1);
-  t1 = std::chrono::steady_clock::now();
-  regularize_phase();
-  st_.seconds_regularize = seconds_since(t1);
-  t1 = std::chrono::steady_clock::now();
-  smooth_phase();
-  st_.seconds_smooth = seconds_since(t1);
+  timed(&Remesher::set_up, st_.seconds_setup);
+  timed(&Remesher::adapt_phase, st_.seconds_adapt);
+  timed(&Remesher::area_phase, st_.seconds_count);
+  timed(&Remesher::regularize_phase, st_.seconds_regularize);
+  timed(&Remesher::smooth_phase, st_.seconds_smooth);
   RemeshResult r = result();
   r.stats.seconds_total = seconds_since(t0);
   report("done", 1);

@@ -101,6 +101,31 @@ Rgb8 ramp(double t) {  // blue -> cyan -> yellow -> red
   return {static_cast<std::uint8_t>(r), static_cast<std::uint8_t>(g), static_cast<std::uint8_t>(b)};
 }
 
+// Distinct neighbours per vertex.
+std::vector<int> valences(const Mesh& m) {
+  std::vector<std::vector<int>> nb(m.positions.size());
+  for (const auto& t : m.triangles)
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        if (i != j) nb[t[i]].push_back(t[j]);
+  std::vector<int> valence(nb.size());
+  for (std::size_t v = 0; v < nb.size(); ++v) {
+    std::sort(nb[v].begin(), nb[v].end());
+    valence[v] = static_cast<int>(std::unique(nb[v].begin(), nb[v].end()) - nb[v].begin());
+  }
+  return valence;
+}
+
+// The mesh from the default view and turned by 90 deg, side by side.
+Image8 two_views(const Mesh& s, int view_size, bool wireframe) {
+  RenderOptions o;
+  o.width = o.height = view_size;
+  o.draw_wireframe = wireframe;
+  Image8 a = render_mesh(s, o);
+  o.azimuth_deg += 90;
+  return hconcat({a, render_mesh(s, o)});
+}
+
 }  // namespace
 
 std::array<double, 2> sampled_distance(const Mesh& a, const Mesh& b) {
@@ -165,19 +190,12 @@ RemeshQuality evaluate_remesh(const Mesh& input, const RemeshResult& r, bool che
   q.mean_min_angle_deg = asum / nf * 180 / std::numbers::pi;
   q.fraction_min_angle_ge_30 = static_cast<double>(ge30) / nf;
   q.aspect_ratio_mean = qsum / nf;
-  std::vector<std::vector<int>> nb(q.vertices);
-  for (const auto& t : m.triangles)
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j)
-        if (i != j) nb[t[i]].push_back(t[j]);
+  const std::vector<int> valence = valences(m);
   for (std::size_t v = 0; v < q.vertices; ++v) {
-    auto& l = nb[v];
-    std::sort(l.begin(), l.end());
-    l.erase(std::unique(l.begin(), l.end()), l.end());
     const int opt = optimal_valence(r.kind[v], r.sides[v]);
     if (opt == 0) continue;
     ++q.valence_counted;
-    q.valence_optimal += static_cast<int>(l.size()) == opt;
+    q.valence_optimal += valence[v] == opt;
   }
   q.fraction_irregular =
       q.valence_counted ? 1.0 - static_cast<double>(q.valence_optimal) / q.valence_counted : 0.0;
@@ -232,20 +250,11 @@ std::string RemeshQuality::to_json() const {
 
 Image8 render_quality(const RemeshResult& r, int view_size) {
   const Mesh& m = r.mesh;
-  std::vector<std::vector<int>> nb(m.positions.size());
-  for (const auto& t : m.triangles)
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j)
-        if (i != j) nb[t[i]].push_back(t[j]);
+  const std::vector<int> valence = valences(m);
   std::vector<int> mark(m.positions.size(), 0);
-  for (std::size_t v = 0; v < nb.size(); ++v) {
-    auto& l = nb[v];
-    std::sort(l.begin(), l.end());
-    l.erase(std::unique(l.begin(), l.end()), l.end());
-    const int opt = optimal_valence(r.kind[v], r.sides[v]);
-    if (opt)
-      mark[v] = static_cast<int>(l.size()) > opt ? 1 : (static_cast<int>(l.size()) < opt ? -1 : 0);
-  }
+  for (std::size_t v = 0; v < valence.size(); ++v)
+    if (const int opt = optimal_valence(r.kind[v], r.sides[v]))
+      mark[v] = valence[v] > opt ? 1 : (valence[v] < opt ? -1 : 0);
   // Unshared corners so each face has its own colour; irregular corners white / black.
   Mesh s;
   for (const auto& t : m.triangles) {
@@ -258,13 +267,7 @@ Image8 render_quality(const RemeshResult& r, int view_size) {
     }
     s.triangles.push_back({base, base + 1, base + 2});
   }
-  RenderOptions o;
-  o.width = o.height = view_size;
-  o.draw_wireframe = true;
-  Image8 a = render_mesh(s, o);
-  o.azimuth_deg += 90;
-  Image8 b = render_mesh(s, o);
-  return hconcat({a, b});
+  return two_views(s, view_size, true);
 }
 
 Image8 render_density(const Mesh& input, const std::vector<double>& density, int view_size) {
@@ -281,12 +284,7 @@ Image8 render_density(const Mesh& input, const std::vector<double>& density, int
   s.colors.resize(input.positions.size());
   for (std::size_t v = 0; v < density.size(); ++v)
     s.colors[v] = ramp(hi > lo ? (std::log(density[v]) - lo) / (hi - lo) : 0.5);
-  RenderOptions o;
-  o.width = o.height = view_size;
-  Image8 a = render_mesh(s, o);
-  o.azimuth_deg += 90;
-  Image8 b = render_mesh(s, o);
-  return hconcat({a, b});
+  return two_views(s, view_size, false);
 }
 
 Image8 quality_histograms(const RemeshQuality& q) {

@@ -70,7 +70,6 @@ struct FeatureSkeleton {
   std::size_t sharp_edges = 0, user_edges = 0, nonmanifold_edges = 0, boundary_edges = 0,
               label_edges = 0;
 
-  bool is_skeleton_edge(int v, int w) const { return edge_segment.count(edge_key(v, w)) != 0; }
   std::size_t branch_vertex_count() const;
   //! Point on segment `seg` at arc length s (clamped to [0, length]); `edge`/`t` receive the
   //! input edge index within the segment and the 1D barycentric coordinate on it.
