@@ -1,10 +1,10 @@
 // Animated meshing (seed 003 §1: the mesh follows the moving skeleton) and the per-frame PLY
 // with stable vertex ids (docs/formats.md, "Particle frames").
 #include <charconv>
-#include <cstring>
 #include <sstream>
 
 #include "scanmesh/core/atomic_file.h"
+#include "scanmesh/core/binary_io.h"
 #include "scanmesh/core/errors.h"
 #include "scanmesh/meshing/particles/particles.h"
 
@@ -41,17 +41,6 @@ std::vector<AnimationFrame> animate(const SurfaceAtTime& surface_at, double t0, 
   return out;
 }
 
-namespace {
-void put_f32(std::vector<std::uint8_t>& b, float v) {
-  std::uint32_t u;
-  std::memcpy(&u, &v, 4);
-  for (int k = 0; k < 4; ++k) b.push_back(static_cast<std::uint8_t>(u >> (8 * k)));
-}
-void put_u32(std::vector<std::uint8_t>& b, std::uint32_t u) {
-  for (int k = 0; k < 4; ++k) b.push_back(static_cast<std::uint8_t>(u >> (8 * k)));
-}
-}  // namespace
-
 void write_ply_with_ids(const std::filesystem::path& path, const Mesh& mesh,
                         const std::vector<std::uint64_t>& ids) {
   if (ids.size() != mesh.positions.size())
@@ -64,14 +53,15 @@ void write_ply_with_ids(const std::filesystem::path& path, const Mesh& mesh,
     << "\nproperty list uchar int vertex_indices\nend_header\n";
   const std::string header = h.str();
   std::vector<std::uint8_t> b(header.begin(), header.end());
+  ByteWriter out(b);
   for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
-    for (int a = 0; a < 3; ++a) put_f32(b, static_cast<float>(mesh.positions[i][a]));
+    for (int a = 0; a < 3; ++a) out.f32(static_cast<float>(mesh.positions[i][a]));
     if (ids[i] > 0xffffffffULL) throw InvalidInputError("write_ply_with_ids: id beyond 32 bits");
-    put_u32(b, static_cast<std::uint32_t>(ids[i]));
+    out.u32(static_cast<std::uint32_t>(ids[i]));
   }
   for (const auto& t : mesh.triangles) {
-    b.push_back(3);
-    for (int v : t) put_u32(b, static_cast<std::uint32_t>(v));
+    out.u8(3);
+    for (int v : t) out.u32(static_cast<std::uint32_t>(v));
   }
   write_file_atomically(path, std::span<const std::uint8_t>(b));
 }
@@ -102,11 +92,7 @@ std::vector<std::uint64_t> read_ply_ids(const std::filesystem::path& path) {
                                     " vertices of 16 bytes declared, " +
                                     std::to_string(bytes.size() - data) + " bytes present");
   std::vector<std::uint64_t> ids(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::uint8_t* p = bytes.data() + data + 16 * i + 12;
-    ids[i] = static_cast<std::uint64_t>(p[0]) | static_cast<std::uint64_t>(p[1]) << 8 |
-             static_cast<std::uint64_t>(p[2]) << 16 | static_cast<std::uint64_t>(p[3]) << 24;
-  }
+  for (std::size_t i = 0; i < n; ++i) ids[i] = read_le_u32(bytes.data() + data + 16 * i + 12);
   return ids;
 }
 

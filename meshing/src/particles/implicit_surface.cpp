@@ -2,7 +2,6 @@
 #include "scanmesh/meshing/particles/implicit_surface.h"
 
 #include <cmath>
-#include <numbers>
 
 namespace scanmesh::particles {
 

@@ -10,10 +10,13 @@
 #include <unordered_set>
 
 #include "scanmesh/core/errors.h"
+#include "scanmesh/core/triangle_quality.h"
 #include "scanmesh/meshing/edge_key.h"
 #include "scanmesh/meshing/kernel/triangle_mesh.h"
 #include "scanmesh/meshing/mesh_topology.h"
 #include "scanmesh/meshing/particles/particles.h"
+
+#include "../kernel/vertex_components.h"
 
 namespace scanmesh::particles {
 
@@ -50,26 +53,6 @@ struct Particle {
   ImplicitValue f;
 };
 
-// Union-find over vertex indices, joined triangle by triangle: the connected components of
-// a triangle mesh (through shared vertices).
-class TriangleComponents {
- public:
-  explicit TriangleComponents(std::size_t vertices) : parent_(vertices) {
-    for (std::size_t i = 0; i < vertices; ++i) parent_[i] = static_cast<int>(i);
-  }
-  void join(const std::array<int, 3>& t) {
-    parent_[root(t[1])] = root(t[0]);
-    parent_[root(t[2])] = root(t[0]);
-  }
-  int root(int x) {
-    while (parent_[x] != x) x = parent_[x] = parent_[parent_[x]];
-    return x;
-  }
-
- private:
-  std::vector<int> parent_;
-};
-
 // Throws InvalidInputError for options no mesher can work with.
 void validate_options(const ParticleOptions& o) {
   if (!(o.edge_length > 0.0) || !(o.rho > 0.0) || !(o.time_step_factor > 0.0) || !(o.d_min > 0.0) ||
@@ -82,14 +65,6 @@ void validate_options(const ParticleOptions& o) {
         "particles: impossible options (need edge_length, rho > 0, d_max > 2 d_min, theta in "
         "[0,1], lambda in [0,1), special_factor in (0,1], subdivision_accept in [0,1], "
         "subdivision_trials and max_spread_particles >= 0)");
-}
-
-double min_angle(const Vector3d& a, const Vector3d& b, const Vector3d& c) {
-  auto ang = [](const Vector3d& p, const Vector3d& q, const Vector3d& r) {
-    const Vector3d u = q - p, w = r - p;
-    return std::atan2(u.cross(w).norm(), u.dot(w));
-  };
-  return std::min({ang(a, b, c), ang(b, c, a), ang(c, a, b)});
 }
 
 }  // namespace
@@ -257,7 +232,7 @@ struct SpringNetwork::Impl {
         for (int k = 0; k < 3; ++k) q[k] = t[k] < 0 ? m : P(t[k]);
         const Vector3d after = (q[1] - q[0]).cross(q[2] - q[0]);
         if (after.dot(before) <= 0.2 * before.norm() * after.norm()) return false;
-        if (min_angle(q[0], q[1], q[2]) < 5.0 * std::numbers::pi / 180.0) return false;
+        if (triangle_min_angle(q[0], q[1], q[2]) < 5.0 * std::numbers::pi / 180.0) return false;
       }
     mesh.collapse(b, a);
     springs.erase(edge_key(a, b));
@@ -346,8 +321,10 @@ struct SpringNetwork::Impl {
         face_normal(mesh.tri[ef[0]]).normalized() + face_normal(mesh.tri[ef[1]]).normalized();
     if (mode != kDelaunay && n0.dot(n1) < 0.5 * n0.norm() * n1.norm()) return false;  // crease
     if (n0.dot(old_n) <= 0.0 || n1.dot(old_n) <= 0.0) return false;
-    const double min_new = std::min(min_angle(P(a), P(d), P(c)), min_angle(P(b), P(c), P(d)));
-    const double min_old = std::min(min_angle(P(a), P(b), P(c)), min_angle(P(b), P(a), P(d)));
+    const double min_new =
+        std::min(triangle_min_angle(P(a), P(d), P(c)), triangle_min_angle(P(b), P(c), P(d)));
+    const double min_old =
+        std::min(triangle_min_angle(P(a), P(b), P(c)), triangle_min_angle(P(b), P(a), P(d)));
     if (min_new < std::min(min_old, 10.0 * std::numbers::pi / 180.0)) return false;
     const double rest =
         0.25 * (spring(a, c).rest + spring(b, c).rest + spring(a, d).rest + spring(b, d).rest);
@@ -545,7 +522,7 @@ struct SpringNetwork::Impl {
   }
   // The alive particles grouped by connected component (through faces), in index order.
   std::vector<std::vector<int>> particles_by_component() const {
-    TriangleComponents components(particles.size());
+    kernel::VertexComponents components(particles.size());
     for (std::size_t f = 0; f < mesh.tri.size(); ++f)
       if (mesh.face_alive[f]) components.join(mesh.tri[f]);
     std::vector<int> group_of(particles.size(), -1);
@@ -1165,7 +1142,7 @@ struct SpringNetwork::Impl {
       const int v = touched.back();
       touched.pop_back();
       if (!mesh.vertex_alive[v] || mesh.vfaces[v].size() < 2) continue;
-      const std::vector<int> doomed = faces_off_largest_wedge(v);
+      const std::vector<int> doomed = kernel::faces_off_largest_wedge(mesh.tri, mesh.vfaces[v], v);
       for (int f : doomed) touched.insert(touched.end(), mesh.tri[f].begin(), mesh.tri[f].end());
       drop_faces(doomed);
     }
@@ -1179,41 +1156,6 @@ struct SpringNetwork::Impl {
     separate_wedges(std::move(all));
     if (dead_faces() != before) rebuild_springs();
   }
-  // The faces round v that are not in its largest wedge (faces joined across edges at v).
-  std::vector<int> faces_off_largest_wedge(int v) const {
-    const std::vector<int>& star = mesh.vfaces[v];
-    std::vector<int> wedge(star.size(), -1);
-    std::vector<int> size;
-    for (std::size_t s0 = 0; s0 < star.size(); ++s0) {
-      if (wedge[s0] >= 0) continue;
-      const int w = static_cast<int>(size.size());
-      size.push_back(0);
-      std::vector<std::size_t> stack{s0};
-      wedge[s0] = w;
-      while (!stack.empty()) {
-        const std::size_t s = stack.back();
-        stack.pop_back();
-        ++size[w];
-        for (std::size_t t = 0; t < star.size(); ++t)
-          if (wedge[t] < 0 && share_edge_at(star[s], star[t], v)) wedge[t] = w, stack.push_back(t);
-      }
-    }
-    std::vector<int> off;
-    if (size.size() < 2) return off;
-    const int keep = static_cast<int>(std::max_element(size.begin(), size.end()) - size.begin());
-    for (std::size_t s = 0; s < star.size(); ++s)
-      if (wedge[s] != keep) off.push_back(star[s]);
-    return off;
-  }
-  // True if faces f and g share an edge that ends at v.
-  bool share_edge_at(int f, int g, int v) const {
-    for (int a : mesh.tri[f])
-      if (a != v)
-        for (int b : mesh.tri[g])
-          if (a == b) return true;
-    return false;
-  }
-
   bool cut_ring(const std::vector<int>& ring,
                 const std::unordered_map<int, std::array<int, 3>>& cand,
                 const ImplicitSurface& surface) {
@@ -1741,19 +1683,8 @@ void SpringNetwork::project(const ImplicitSurface& surface) {
 }
 
 Mesh SpringNetwork::mesh() const {
-  const Impl& m = *impl_;
-  Mesh out;
-  std::vector<int> map(m.particles.size(), -1);
-  for (std::size_t i = 0; i < m.particles.size(); ++i)
-    if (m.mesh.vertex_alive[i]) {
-      map[i] = static_cast<int>(out.positions.size());
-      out.positions.push_back(m.mesh.pos[i]);
-    }
-  for (std::size_t f = 0; f < m.mesh.tri.size(); ++f) {
-    if (!m.mesh.face_alive[f]) continue;
-    const auto& t = m.mesh.tri[f];
-    out.triangles.push_back({map[t[0]], map[t[1]], map[t[2]]});
-  }
+  Mesh out = impl_->mesh.to_mesh();
+  out.face_labels.clear();  // the network has no regions
   return out;
 }
 
@@ -1770,14 +1701,6 @@ int SpringNetwork::iteration() const { return impl_->iter; }
 bool SpringNetwork::converged() const { return impl_->converged; }
 
 namespace {
-
-int component_count(const Mesh& m) {
-  TriangleComponents components(m.positions.size());
-  for (const auto& t : m.triangles) components.join(t);
-  std::unordered_set<int> roots;
-  for (const auto& t : m.triangles) roots.insert(components.root(t[0]));
-  return static_cast<int>(roots.size());
-}
 
 // 1:4 subdivision; the edge midpoints are Newton-projected onto the surface. Every new
 // vertex has valence 6, so the valence defects of the coarse mesh are all the fine mesh has.
@@ -1817,7 +1740,7 @@ bool same_topology(const SpringNetwork& net, const TopologyStats& reference, int
   const TopologyStats s = topology_stats(m);
   return net.converged() && s.boundary_edges == 0 && s.nonmanifold_edges == 0 &&
          s.euler_characteristic == reference.euler_characteristic &&
-         component_count(m) == components;
+         s.components == static_cast<std::size_t>(components);
 }
 
 // The layered start: marching tetrahedra at 2^k R relaxed and subdivided 1:4 level by level.
@@ -1830,7 +1753,7 @@ SpringNetwork layered_network(const ImplicitSurface& surface, const ParticleOpti
   // mesh has the fine one's topology (closed, same components and Euler characteristic) and
   // enough vertices is relaxed, then subdivided 1:4 and relaxed again at half the length.
   const TopologyStats fine_stats = topology_stats(fine);
-  const int fine_components = component_count(fine);
+  const int fine_components = static_cast<int>(fine_stats.components);
   int level = 0;
   Mesh start = fine;
   if (fine_stats.boundary_edges == 0)
@@ -1840,7 +1763,7 @@ SpringNetwork layered_network(const ImplicitSurface& surface, const ParticleOpti
       const TopologyStats cs = topology_stats(coarse);
       if (cs.boundary_edges != 0 || cs.nonmanifold_edges != 0 ||
           cs.euler_characteristic != fine_stats.euler_characteristic ||
-          component_count(coarse) != fine_components ||
+          static_cast<int>(cs.components) != fine_components ||
           coarse.vertex_count() < 150u * static_cast<std::size_t>(fine_components))
         continue;
       level = k;
@@ -1862,7 +1785,7 @@ SpringNetwork layered_network(const ImplicitSurface& surface, const ParticleOpti
     const TopologyStats rs = topology_stats(relaxed);
     if (!net.converged() || rs.boundary_edges != 0 ||
         rs.euler_characteristic != fine_stats.euler_characteristic ||
-        component_count(relaxed) != fine_components) {
+        static_cast<int>(rs.components) != fine_components) {
       start = fine;  // the coarse level did not settle: start again from the fine mesh
       break;
     }
@@ -1888,7 +1811,7 @@ SpringNetwork layered_network(const ImplicitSurface& surface, const ParticleOpti
       const TopologyStats ss = topology_stats(second);
       if (again.converged() && ss.boundary_edges == 0 &&
           ss.euler_characteristic == fine_stats.euler_characteristic &&
-          component_count(second) == fine_components)
+          static_cast<int>(ss.components) == fine_components)
         start = subdivide(second, surface);
     }
   }
@@ -1998,7 +1921,7 @@ std::vector<CoarseCandidate> coarse_candidates(const ImplicitSurface& surface,
                                                const ParticleOptions& options, const Mesh& fine,
                                                int* iterations) {
   const TopologyStats fine_stats = topology_stats(fine);
-  const int components = component_count(fine);
+  const int components = static_cast<int>(fine_stats.components);
   const long long chi = fine_stats.euler_characteristic;
   const double R = options.edge_length;
   const double per_component = 12.0 * components;
@@ -2010,7 +1933,7 @@ std::vector<CoarseCandidate> coarse_candidates(const ImplicitSurface& surface,
   if (source.triangles.empty() || source_stats.boundary_edges != 0 ||
       source_stats.nonmanifold_edges != 0 ||
       source_stats.euler_characteristic != fine_stats.euler_characteristic ||
-      component_count(source) != components)
+      static_cast<int>(source_stats.components) != components)
     source = fine;
   {
     ParticleOptions half = options;
@@ -2079,7 +2002,7 @@ SpringNetwork relaxed_network(const ImplicitSurface& surface, const ParticleOpti
         (u.first == best_uniformity.first && u.second < best_uniformity.second))
       best_uniformity = u, best = std::move(net);
   };
-  const int components = component_count(fine);
+  const int components = static_cast<int>(fine_stats.components);
   // Spheres (genus 0) only: a coarse mesh of a dozen particles cannot follow a torus' hole
   // (its subdivision did not converge in 3,000 steps).
   const bool spheres = fine_stats.euler_characteristic == 2LL * components;
