@@ -63,6 +63,14 @@ inline double angle_at(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
   return std::atan2(u.cross(v).norm(), u.dot(v));
 }
 
+//! The angles of triangle f (corners in P) at f[0], f[1] and f[2], in radians.
+inline std::array<double, 3> corner_angles(std::span<const Eigen::Vector3d> P,
+                                           const std::array<int, 3>& f) {
+  std::array<double, 3> a;
+  for (int k = 0; k < 3; ++k) a[k] = angle_at(P[f[k]], P[f[(k + 1) % 3]], P[f[(k + 2) % 3]]);
+  return a;
+}
+
 //! The smallest angle of the triangle (a, b, c), in radians: the angle opposite the shortest
 //! side, so one atan2 instead of three (angle evaluations are a large share of the meshers' and
 //! the repair's work).
@@ -71,6 +79,26 @@ inline double min_angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
   const double la = (b - c).squaredNorm(), lb = (c - a).squaredNorm(), lc = (a - b).squaredNorm();
   if (la <= lb && la <= lc) return angle_at(a, b, c);
   return lb <= lc ? angle_at(b, c, a) : angle_at(c, a, b);
+}
+
+//! Distance from p to the segment a-b (2D or 3D).
+template <typename Vector>
+double point_segment_distance(const Vector& p, const Vector& a, const Vector& b) {
+  const Vector ab = b - a;
+  const double t =
+      ab.squaredNorm() > 0 ? std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
+  return (a + t * ab - p).norm();
+}
+
+//! The key of 3D grid cell (x, y, z): each coordinate's low 21 bits (two's complement).
+inline std::int64_t pack_cell(std::int64_t x, std::int64_t y, std::int64_t z) {
+  return ((x & 0x1fffff) << 42) | ((y & 0x1fffff) << 21) | (z & 0x1fffff);
+}
+//! The key of the grid cell (of side `cell`) that contains x.
+inline std::int64_t cell_key(const Eigen::Vector3d& x, double cell) {
+  return pack_cell(static_cast<std::int64_t>(std::floor(x.x() / cell)),
+                   static_cast<std::int64_t>(std::floor(x.y() / cell)),
+                   static_cast<std::int64_t>(std::floor(x.z() / cell)));
 }
 
 //! The map from a tangent displacement at a surface point to the (phi, h) step that makes it,
@@ -193,7 +221,7 @@ class TriangleCells {
     for (std::int64_t x = cells.min().x(); x <= cells.max().x(); ++x)
       for (std::int64_t y = cells.min().y(); y <= cells.max().y(); ++y)
         for (std::int64_t z = cells.min().z(); z <= cells.max().z(); ++z) {
-          const std::vector<int>* list = lists_.find(key(x, y, z));
+          const std::vector<int>* list = lists_.find(pack_cell(x, y, z));
           if (!list) continue;
           for (int u : *list) {
             if (u == self || u >= static_cast<int>(n_triangles) || stamp_[u] == epoch_) continue;
@@ -211,9 +239,6 @@ class TriangleCells {
 
  private:
   CellBox cells_of(const std::array<int, 3>& f, std::span<const Eigen::Vector3d> P) const;
-  static std::int64_t key(std::int64_t x, std::int64_t y, std::int64_t z) {
-    return ((x & 0x1fffff) << 42) | ((y & 0x1fffff) << 21) | (z & 0x1fffff);
-  }
   double cell_;
   CellLists lists_;
   std::vector<CellBox> filed_;                // per triangle: its last filing's cells
@@ -229,6 +254,17 @@ struct NodeStore {
   int add(const Eigen::Vector2d& param, const ScanSurface& surface);
   //! Moves node i to (phi, h); false (node unchanged) if the surface is undefined there.
   bool move(int i, const Eigen::Vector2d& param, const ScanSurface& surface);
+  //! A node's (phi, h), point and normal, for putting it back after a trial move.
+  struct Saved {
+    Eigen::Vector2d param;
+    Eigen::Vector3d pos, normal;
+  };
+  Saved save(int i) const { return {params[i], pos[i], normal[i]}; }
+  void restore(int i, const Saved& s) {
+    params[i] = s.param;
+    pos[i] = s.pos;
+    normal[i] = s.normal;
+  }
 };
 
 //! (phi, h) of a 3D point near the surface: the cylindrical angle unwrapped next to `near_phi`.

@@ -13,7 +13,6 @@
 #include <unordered_map>
 
 #include "aft_internal.h"
-#include "scanmesh/core/errors.h"
 #include "scanmesh/reconstruction/bisection.h"
 
 namespace scanmesh::aft::detail {
@@ -56,13 +55,6 @@ bool segments_cross(const Vector2d& p1, const Vector2d& p2, const Vector2d& q1, 
   const double d3 = cross2(q2 - q1, p1 - q1), d4 = cross2(q2 - q1, p2 - q1);
   return ((d1 > eps && d2 < -eps) || (d1 < -eps && d2 > eps)) &&
          ((d3 > eps && d4 < -eps) || (d3 < -eps && d4 > eps));
-}
-
-double point_segment_distance(const Vector3d& p, const Vector3d& a, const Vector3d& b) {
-  const Vector3d ab = b - a;
-  const double t =
-      ab.squaredNorm() > 0 ? std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
-  return (a + t * ab - p).norm();
 }
 
 // The root of the bisection: [a, b] halved while wider than `tol` (at most 200 times), keeping
@@ -342,19 +334,10 @@ class Mesher {
 
   // Front edges bucketed by the cell of their midpoint (lazy deletion), so the search near an
   // edge costs O(local front) instead of O(front).
-  std::int64_t cell_coord(double v) const {
-    return static_cast<std::int64_t>(std::floor(v / cell_)) & 0x1fffff;
-  }
-  static std::int64_t cell_key(std::int64_t cx, std::int64_t cy, std::int64_t cz) {
-    return (cx << 42) | (cy << 21) | cz;
-  }
-  std::int64_t cell_key(const Vector3d& x) const {
-    return cell_key(cell_coord(x.x()), cell_coord(x.y()), cell_coord(x.z()));
-  }
   void bucket(int id) {
     const FEdge& e = edges_[id];
     max_len_ = std::max(max_len_, e.length);
-    grid_[cell_key(0.5 * (N_.pos[e.a] + N_.pos[e.b]))].push_back(id);
+    grid_[cell_key(0.5 * (N_.pos[e.a] + N_.pos[e.b]), cell_)].push_back(id);
     param_bucket(id);
   }
 
@@ -461,8 +444,7 @@ class Mesher {
     for (std::int64_t dx = 0; dx < count[0]; ++dx)
       for (std::int64_t dy = 0; dy < count[1]; ++dy)
         for (std::int64_t dz = 0; dz < count[2]; ++dz) {
-          std::vector<int>* found = grid_.find(
-              cell_key((lo[0] + dx) & 0x1fffff, (lo[1] + dy) & 0x1fffff, (lo[2] + dz) & 0x1fffff));
+          std::vector<int>* found = grid_.find(pack_cell(lo[0] + dx, lo[1] + dy, lo[2] + dz));
           if (!found) continue;
           auto& list = *found;
           std::size_t keep = 0;
@@ -504,9 +486,7 @@ class Mesher {
 
   bool visible(int a, int b, int c, const Vector3d& cpos, const Vector2d& cparam, const Frame& f,
                const Near& near3d) {
-    ParamFrame pf;
-    pf.origin = N_.params[a];
-    pf.rho = std::max(1e-6, std::hypot(f.M.x(), f.M.y()));
+    const ParamFrame pf{N_.params[a], std::max(1e-6, std::hypot(f.M.x(), f.M.y()))};
     auto P2 = [&](int v) { return pf(N_.params[v]); };
     const Vector2d A = P2(a), B = P2(b), C = pf(cparam);
     const double scale = (B - A).norm();
@@ -746,15 +726,11 @@ class Mesher {
     const double half = 0.5 * (f(B) - f(A)).norm();
     // Existing candidates ordered by their circumcentre on the bisector (Delaunay rule).
     std::vector<std::pair<double, int>> cand;
-    const double rho = std::max(1e-6, std::hypot(f.M.x(), f.M.y()));
-    auto pp = [&](int v) {
-      return Vector2d(rho * wrap_angle(N_.params[v].x() - N_.params[a].x()),
-                      N_.params[v].y() - N_.params[a].y());
-    };
-    const Vector2d pb = pp(b);
+    const ParamFrame pf{N_.params[a], std::max(1e-6, std::hypot(f.M.x(), f.M.y()))};
+    const Vector2d pb = pf(N_.params[b]);
     for (int v : nr.nodes) {
       if (v == a || v == b) continue;
-      if (cross2(pb, pp(v)) <= 1e-9 * el * el) continue;  // not left of the edge
+      if (cross2(pb, pf(N_.params[v])) <= 1e-9 * el * el) continue;  // not left of the edge
       if (!relaxed && N_.normal[v].dot(f.n) < 0.2) continue;
       Vector2d P = f(N_.pos[v]);
       if (P.y() <= 1e-6 * el) {

@@ -6,7 +6,6 @@
 #include <exception>
 #include <limits>
 #include <optional>
-#include <set>
 #include <sstream>
 #include <tuple>
 #include <unordered_map>
@@ -21,7 +20,6 @@
 
 namespace scanmesh::aft {
 
-using detail::angle_at;
 using detail::min_angle;
 using detail::wrap_angle;
 using Eigen::Vector2d;
@@ -234,15 +232,10 @@ int valence_flips(std::vector<std::array<int, 3>>& T, const detail::NodeStore& s
   const std::vector<Vector3d>& P = store.pos;
   flipped_corners.assign(P.size(), 0);
   FlipPass pass_mesh(T, P);
-  std::vector<int> val(P.size(), 0);
-  for (const std::uint64_t key : pass_mesh.mesh().edges()) {
-    ++val[edge_key_first(key)];
-    ++val[edge_key_second(key)];
-  }
   const std::vector<int> ideal = ideal_valences(T, P, pass_mesh.mesh());
   // Squared deviation of v's valence, changed by d, from its ideal.
   const auto dev = [&](int v, int d) {
-    const int x = val[v] + d - ideal[v];
+    const int x = pass_mesh.mesh().valence(v) + d - ideal[v];
     return x * x;
   };
   const auto unit_normal = [&](int x, int y, int z) {
@@ -281,10 +274,6 @@ int valence_flips(std::vector<std::array<int, 3>>& T, const detail::NodeStore& s
       guard.changed(t1);
       guard.changed(t2);
       for (const int v : {a, b, r, s}) flipped_corners[v] = 1;
-      --val[a];
-      --val[b];
-      ++val[r];
-      ++val[s];
       ++pass_flips;
     }
     flips += pass_flips;
@@ -297,9 +286,7 @@ int valence_flips(std::vector<std::array<int, 3>>& T, const detail::NodeStore& s
 // that involve a triangle with a corner flagged in `near` (the valence flips' quad corners).
 std::size_t count_crossings_near(const std::vector<std::array<int, 3>>& tris,
                                  const std::vector<Vector3d>& pos, const std::vector<char>& near) {
-  Mesh m;
-  m.positions = pos;
-  m.triangles = tris;
+  const Mesh m{.positions = pos, .triangles = tris};
   std::vector<char> involved(tris.size(), 0);
   const auto flagged = [&](int v) { return v < static_cast<int>(near.size()) && near[v]; };
   for (std::size_t t = 0; t < tris.size(); ++t)
@@ -383,10 +370,9 @@ void smooth_steiner_points(const std::vector<std::array<int, 3>>& tris, detail::
             ++n;
           }
       c /= n;
-      const Vector2d old_param = store.params[v];
+      const detail::NodeStore::Saved old = store.save(static_cast<int>(v));
       const double before = star_min(v);
-      const Vector3d old_pos = store.pos[v], old_n = store.normal[v];
-      const auto pr = surface.project(c, old_param);
+      const auto pr = surface.project(c, old.param);
       if (!pr) continue;
       const Vector2d param(pr->phi, pr->h);
       if (!store.move(static_cast<int>(v), param, surface)) continue;
@@ -403,7 +389,7 @@ void smooth_steiner_points(const std::vector<std::array<int, 3>>& tris, detail::
         }
       }
       ok = ok && (after > before ||
-                  (after >= std::min(before, kSmoothingAngleFloor) && rounder(v, old_pos)));
+                  (after >= std::min(before, kSmoothingAngleFloor) && rounder(v, old.pos)));
       if (ok && star_on_wall(v)) {
         for (int t : vt[v])
           if (guard.crosses(tris[t], t)) {
@@ -412,9 +398,7 @@ void smooth_steiner_points(const std::vector<std::array<int, 3>>& tris, detail::
           }
       }
       if (!ok) {
-        store.params[v] = old_param;
-        store.pos[v] = old_pos;
-        store.normal[v] = old_n;
+        store.restore(static_cast<int>(v), old);
       } else {
         moved_at[v] = step;
         stayed_at[v] = -1;
@@ -433,9 +417,7 @@ struct StitchDefects {
 };
 StitchDefects stitch_defects(const std::vector<std::array<int, 3>>& tris,
                              const std::vector<int>& labels, const std::vector<Vector3d>& pos) {
-  Mesh mesh;
-  mesh.positions = pos;
-  mesh.triangles = tris;
+  const Mesh mesh{.positions = pos, .triangles = tris};
   StitchDefects d;
   d.overfull_edges = topology_stats(mesh).nonmanifold_edges;
   for (const auto& [f, g] : intersecting_face_pairs(mesh)) {
@@ -480,13 +462,20 @@ void check_triangle_budget(const RegionGraph& g, const ScanSurface& surface) {
 
 std::size_t crossings_within(const std::vector<std::array<int, 3>>& tris,
                              const std::vector<Vector3d>& pos) {
-  Mesh mesh;
-  mesh.positions = pos;
-  mesh.triangles = tris;
-  return count_intersecting_faces(mesh);
+  return count_intersecting_faces(Mesh{.positions = pos, .triangles = tris});
 }
 
 using Clock = std::chrono::steady_clock;
+
+// Every stage's time of `more` added to `sum`.
+void add(AnimationMesh::StageSeconds& sum, const AnimationMesh::StageSeconds& more) {
+  sum.segments += more.segments;
+  sum.regions += more.regions;
+  sum.flips += more.flips;
+  sum.smoothing += more.smoothing;
+  sum.repair += more.repair;
+  sum.check += more.check;
+}
 
 double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
@@ -520,32 +509,6 @@ struct RegionJob {
   AnimationMesh::StageSeconds thread_seconds;
 };
 
-// The region as the polygon of its boundary nodes (the chords the front starts from, not
-// the curves: a chord cutting a curved opening's corner must not count as leaving).
-std::vector<Vector2d> boundary_polygon(const RegionGraph& g, const SegmentNodes& seg, int c) {
-  std::vector<Vector2d> poly;
-  for (const HalfEdgeRef& he : g.cycles[c].edges) {
-    std::vector<int> chain = seg.chains[he.segment];
-    if (!he.forward) std::reverse(chain.begin(), chain.end());
-    for (std::size_t k = 0; k + 1 < chain.size(); ++k) {
-      Vector2d p = seg.params[chain[k]];
-      if (!poly.empty()) p.x() = poly.back().x() + wrap_angle(p.x() - poly.back().x());
-      poly.push_back(p);
-    }
-  }
-  return poly;
-}
-
-// The chain edges of cycle c in the cycle's direction: where the region's front starts.
-void append_front_edges(const RegionGraph& g, const SegmentNodes& seg, int c,
-                        std::vector<std::array<int, 2>>& front) {
-  for (const HalfEdgeRef& he : g.cycles[c].edges) {
-    std::vector<int> chain = seg.chains[he.segment];
-    if (!he.forward) std::reverse(chain.begin(), chain.end());
-    for (std::size_t k = 0; k + 1 < chain.size(); ++k) front.push_back({chain[k], chain[k + 1]});
-  }
-}
-
 // The mesher's input for region r: its settings, its boundary polygons and its front.
 detail::RegionMeshInput region_mesh_input(const RegionGraph& g, const SegmentNodes& seg,
                                           const RegionSettings& settings, std::size_t r) {
@@ -559,8 +522,22 @@ detail::RegionMeshInput region_mesh_input(const RegionGraph& g, const SegmentNod
   in.max_steps = static_cast<std::size_t>(settings.max_front_steps);
   std::vector<int> cycles{reg.outer};
   cycles.insert(cycles.end(), reg.inner.begin(), reg.inner.end());
-  for (int c : cycles) in.polygons.push_back(boundary_polygon(g, seg, c));
-  for (int c : cycles) append_front_edges(g, seg, c, in.front);
+  // Each cycle gives the polygon of its boundary nodes (the chords the front starts from, not
+  // the curves: a chord cutting a curved opening's corner must not count as leaving) and its
+  // chain edges in the cycle's direction, where the region's front starts.
+  for (int c : cycles) {
+    std::vector<Vector2d>& poly = in.polygons.emplace_back();
+    for (const HalfEdgeRef& he : g.cycles[c].edges) {
+      std::vector<int> chain = seg.chains[he.segment];
+      if (!he.forward) std::reverse(chain.begin(), chain.end());
+      for (std::size_t k = 0; k + 1 < chain.size(); ++k) {
+        Vector2d p = seg.params[chain[k]];
+        if (!poly.empty()) p.x() = poly.back().x() + wrap_angle(p.x() - poly.back().x());
+        poly.push_back(p);
+        in.front.push_back({chain[k], chain[k + 1]});
+      }
+    }
+  }
   return in;
 }
 
@@ -715,9 +692,7 @@ struct RegionMesher {
     job.flips = r.flips;
     job.valence_flip_retries = r.valence_flip_retries;
     job.repair = r.repair;
-    job.thread_seconds.flips = r.seconds.flips;
-    job.thread_seconds.smoothing = r.seconds.smoothing;
-    job.thread_seconds.repair = r.seconds.repair;
+    add(job.thread_seconds, r.seconds);  // (it holds only the meshing's time so far)
   }
 
   // One region meshed (and post-processed, unless that runs on the stitched mesh) from scratch.
@@ -806,10 +781,7 @@ void remesh_with_other_front_orders(RegionJob& job, const RegionMesher& mesher) 
     job.in.seed = seed;
     job.thread_seconds = {};
     mesher.mesh_region(job);
-    spent.regions += job.thread_seconds.regions;
-    spent.flips += job.thread_seconds.flips;
-    spent.smoothing += job.thread_seconds.smoothing;
-    spent.repair += job.thread_seconds.repair;
+    add(spent, job.thread_seconds);
     if (const auto b = badness(job); b < best_badness) {
       best = job;
       best_badness = b;
@@ -857,10 +829,7 @@ void add_region_stats(const std::vector<RegionJob>& jobs, AnimationMesh& am) {
     am.repair_left_below_20 += job.repair.left_below_goal;
     am.repair_forced_below_20 += job.repair.forced_below_goal;
     am.repair_left_above_deviation_goal += job.repair.left_above_deviation_goal;
-    am.thread_seconds.regions += job.thread_seconds.regions;
-    am.thread_seconds.flips += job.thread_seconds.flips;
-    am.thread_seconds.smoothing += job.thread_seconds.smoothing;
-    am.thread_seconds.repair += job.thread_seconds.repair;
+    add(am.thread_seconds, job.thread_seconds);
   }
 }
 
@@ -887,9 +856,7 @@ void postprocess_stitched_if_needed(const std::vector<RegionJob>& jobs, const Re
       am.repair_forced_below_20 = r.repair.forced_below_goal;
       am.repair_left_above_deviation_goal = r.repair.left_above_deviation_goal;
       am.serial_postprocessing = true;
-      am.seconds.flips = r.seconds.flips;
-      am.seconds.smoothing = r.seconds.smoothing;
-      am.seconds.repair = r.seconds.repair;
+      add(am.seconds, r.seconds);  // (no post-processing time in it so far)
       stitched = std::move(meshed);
     }
   }
@@ -1025,8 +992,7 @@ AnimationMeshQuality evaluate_quality(const AnimationMesh& am, const ScanSurface
   std::unordered_set<std::uint64_t> edges;
   for (std::size_t t = 0; t < T.size(); ++t) {
     const auto& f = T[t];
-    std::array<double, 3> ang{};
-    for (int k = 0; k < 3; ++k) ang[k] = angle_at(P[f[k]], P[f[(k + 1) % 3]], P[f[(k + 2) % 3]]);
+    const std::array<double, 3> ang = detail::corner_angles(P, f);
     const int kmin = static_cast<int>(std::min_element(ang.begin(), ang.end()) - ang.begin());
     const double mn = ang[kmin] * 180 / M_PI,
                  mx = *std::max_element(ang.begin(), ang.end()) * 180 / M_PI;

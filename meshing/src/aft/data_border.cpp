@@ -194,19 +194,12 @@ int winding(const std::vector<Vector2d>& loop, double W) {
   return static_cast<int>(std::lround((first.x() - loop.front().x()) / W));
 }
 
-double distance_to_chord(const Vector2d& p, const Vector2d& a, const Vector2d& b) {
-  const Vector2d ab = b - a;
-  const double t =
-      ab.squaredNorm() > 0 ? std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
-  return (a + t * ab - p).norm();
-}
-
 void douglas_peucker(const std::vector<Vector2d>& p, std::size_t i0, std::size_t i1, double tol,
                      std::vector<Vector2d>& out) {
   double worst = -1;
   std::size_t k = i0;
   for (std::size_t i = i0 + 1; i < i1; ++i) {
-    const double d = distance_to_chord(p[i], p[i0], p[i1]);
+    const double d = detail::point_segment_distance(p[i], p[i0], p[i1]);
     if (d > worst) {
       worst = d;
       k = i;
@@ -334,15 +327,7 @@ DataBorderMode parse_data_border_mode(std::string_view name) {
 }
 
 const char* to_string(DataBorderMode mode) {
-  switch (mode) {
-    case DataBorderMode::On:
-      return "on";
-    case DataBorderMode::Off:
-      return "off";
-    case DataBorderMode::Auto:
-      break;
-  }
-  return "auto";
+  return mode == DataBorderMode::On ? "on" : mode == DataBorderMode::Off ? "off" : "auto";
 }
 
 bool misses_part_of_the_turn(const ScanSurface& surface) {

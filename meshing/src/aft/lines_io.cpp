@@ -3,7 +3,6 @@
 #include <array>
 #include <cctype>
 #include <cmath>
-#include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -18,16 +17,10 @@ namespace scanmesh::aft {
 using Eigen::Vector2d;
 
 const char* to_string(LineKind kind) {
-  switch (kind) {
-    case LineKind::Opening:
-      return "opening";
-    case LineKind::Seam:
-      return "seam";
-    case LineKind::DataBorder:
-      return "data-border";
-    default:
-      return "line";
-  }
+  return kind == LineKind::Opening      ? "opening"
+         : kind == LineKind::Seam       ? "seam"
+         : kind == LineKind::DataBorder ? "data-border"
+                                        : "line";
 }
 
 namespace {

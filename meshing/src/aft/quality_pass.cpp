@@ -12,7 +12,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <set>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -145,15 +144,8 @@ class Repair {
   // True if the smallest angle of t sits between two constraint edges: the input fixes it.
   bool forced(int t) const {
     const auto& f = T_[t];
-    int k = 0;
-    double best = 1e9;
-    for (int i = 0; i < 3; ++i) {
-      const double a = angle_at(S_.pos[f[i]], S_.pos[f[(i + 1) % 3]], S_.pos[f[(i + 2) % 3]]);
-      if (a < best) {
-        best = a;
-        k = i;
-      }
-    }
+    const std::array<double, 3> angles = corner_angles(S_.pos, f);
+    const int k = static_cast<int>(std::min_element(angles.begin(), angles.end()) - angles.begin());
     return C_.count(edge_key(f[k], f[(k + 1) % 3])) && C_.count(edge_key(f[k], f[(k + 2) % 3]));
   }
 
@@ -190,8 +182,7 @@ class Repair {
     std::vector<std::pair<int, std::array<int, 3>>> tris;
     struct Moved {
       int v;
-      Vector2d param;
-      Vector3d pos, normal;
+      NodeStore::Saved old;
     };
     std::vector<Moved> moved;
     TriangleCells::Undo cells;  // the candidate's filings in grid_
@@ -222,8 +213,8 @@ class Repair {
     return hits;
   }
 
-  void set_tri(int t, const std::array<int, 3>& f) {
-    journal_.tris.push_back({t, T_[t]});
+  // Takes t off its corners' triangle lists, sets it to f and lists it again if alive.
+  void relink(int t, const std::array<int, 3>& f) {
     if (T_[t][0] >= 0)
       for (int v : T_[t]) {
         auto& l = vt_[v];
@@ -232,6 +223,10 @@ class Repair {
     T_[t] = f;
     if (f[0] >= 0)
       for (int v : f) vt_[v].push_back(t);
+  }
+  void set_tri(int t, const std::array<int, 3>& f) {
+    journal_.tris.push_back({t, T_[t]});
+    relink(t, f);
     insert(t);
   }
   int add_tri(const std::array<int, 3>& f, int label) {
@@ -250,7 +245,7 @@ class Repair {
   }
   // Moves Steiner point v to (phi, h), journalled; false if the surface is undefined there.
   bool move_vertex(int v, const Vector2d& param) {
-    const Journal::Moved old{v, S_.params[v], S_.pos[v], S_.normal[v]};
+    const Journal::Moved old{v, S_.save(v)};
     if (!S_.move(v, param, surf_)) return false;
     journal_.moved.push_back(old);
     for (int t : vt_[v]) insert(t);
@@ -262,22 +257,10 @@ class Repair {
     journal_.n_verts = S_.pos.size();
   }
   void rollback() {
-    for (auto it = journal_.tris.rbegin(); it != journal_.tris.rend(); ++it) {
-      const int t = it->first;
-      if (T_[t][0] >= 0)
-        for (int v : T_[t]) {
-          auto& l = vt_[v];
-          l.erase(std::find(l.begin(), l.end(), t));
-        }
-      T_[t] = it->second;
-      if (T_[t][0] >= 0)
-        for (int v : T_[t]) vt_[v].push_back(t);
-    }
-    for (auto it = journal_.moved.rbegin(); it != journal_.moved.rend(); ++it) {
-      S_.params[it->v] = it->param;
-      S_.pos[it->v] = it->pos;
-      S_.normal[it->v] = it->normal;
-    }
+    for (auto it = journal_.tris.rbegin(); it != journal_.tris.rend(); ++it)
+      relink(it->first, it->second);
+    for (auto it = journal_.moved.rbegin(); it != journal_.moved.rend(); ++it)
+      S_.restore(it->v, it->old);
     grid_.take_back(journal_.cells);
     T_.resize(journal_.n_tris);
     L_.resize(journal_.n_tris);
@@ -484,11 +467,11 @@ class Repair {
     const Vector3d t1 = n.unitOrthogonal(), t2 = n.cross(t1);
     double step = 0.25 * len;
     for (int it = 0; it < 12 && step > 0.02 * len && cur < kSettledAngle; ++it) {
-      const Vector2d p0 = S_.params[v];
+      const NodeStore::Saved start = S_.save(v);
+      const Vector2d p0 = start.param;
       const auto here = surf_.point_normal(p0.x(), p0.y());
       if (!here) return;
       const Eigen::Matrix<double, 2, 3> to_param = tangent_to_parameters(*here);
-      const Vector3d save_pos = S_.pos[v], save_n = S_.normal[v];
       double best = cur;
       Vector2d best_p = p0;
       for (int d = 0; d < 8; ++d) {
@@ -500,9 +483,7 @@ class Repair {
           best = m;
           best_p = p;
         }
-        S_.pos[v] = save_pos;
-        S_.normal[v] = save_n;
-        S_.params[v] = p0;
+        S_.restore(v, start);
       }
       if (best > cur + 1e-9 && move_vertex(v, best_p)) {
         cur = best;
@@ -667,12 +648,7 @@ class Repair {
               while (journal_.tris.size() > mark) {
                 const auto [tt, old] = journal_.tris.back();
                 journal_.tris.pop_back();
-                for (int v : T_[tt]) {
-                  auto& l = vt_[v];
-                  l.erase(std::find(l.begin(), l.end(), tt));
-                }
-                T_[tt] = old;
-                for (int v : old) vt_[v].push_back(tt);
+                relink(tt, old);
               }
             }
           }

@@ -2,13 +2,10 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
-#include <cstdio>
-#include <fstream>
 #include <initializer_list>
 #include <sstream>
 #include <utility>
 
-#include "scanmesh/core/atomic_file.h"
 #include "scanmesh/core/config_file.h"
 #include "scanmesh/core/errors.h"
 #include "scanmesh/core/texture_layout.h"

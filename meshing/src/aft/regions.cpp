@@ -589,10 +589,7 @@ void add_param_geometry(RegionGraph& g, const std::vector<std::vector<Vector2d>>
                         const std::vector<Vector2d>& node_px, const ScanSurface& surface) {
   for (std::size_t s = 0; s < g.segments.size(); ++s)
     for (const Vector2d& p : seg_px[s]) g.segments[s].pts.push_back(pixel_to_param(surface, p));
-  for (const Vector2d& p : node_px) {
-    Vector2d q = pixel_to_param(surface, p);
-    g.nodes.push_back(q);
-  }
+  for (const Vector2d& p : node_px) g.nodes.push_back(pixel_to_param(surface, p));
 }
 
 // The faces' boundary cycles with their components, windings and areas; returns the cycle of
@@ -765,11 +762,7 @@ Vector2d find_label_point(const RegionGraph& g, const Region& reg, const ScanSur
           const Vector2d b = param_to_pixel(surface, pl[(k + 1) % pl.size()]);
           Vector2d qq = param_to_pixel(surface, q);
           qq.x() += W * std::round((0.5 * (a.x() + b.x()) - qq.x()) / W);
-          const Vector2d ab = b - a;
-          const double t = ab.squaredNorm() > 0
-                               ? std::clamp((qq - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0)
-                               : 0.0;
-          d = std::min(d, (a + t * ab - qq).norm());
+          d = std::min(d, detail::point_segment_distance(qq, a, b));
         }
       };
       clear(poly);

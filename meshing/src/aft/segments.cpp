@@ -1,7 +1,6 @@
 // Segment initialisation (seed 000 §5.1.2) and the "on rails" relaxation (§7.1 item 2).
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 
 #include "aft_internal.h"
 #include "scanmesh/core/errors.h"
@@ -58,7 +57,6 @@ SegmentNodes initialise_segments(const RegionGraph& g, const LineSet& lines,
                                  const ScanSurface& surface, const RegionSettings& settings) {
   SegmentNodes out;
   out.params = g.nodes;
-  const int n_junction = static_cast<int>(g.nodes.size());
   std::vector<Rail> rails;
   std::vector<std::vector<double>> arcs;  // per segment: arc position of every chain node
   for (std::size_t s = 0; s < g.segments.size(); ++s) {
@@ -81,9 +79,9 @@ SegmentNodes initialise_segments(const RegionGraph& g, const LineSet& lines,
     double d = !n ? settings.default_unit_mm
                   : (settings.segment_spacing == SegmentSpacing::Finer ? finer : sum / n);
     if (line.kind == LineKind::Seam && line.node_spacing_mm > 0) d = line.node_spacing_mm;
-    // The measure: arc length, or arc + weight * turning angle of the lifted curve.
+    // The measure: arc length, or arc + weight * turning angle of the lifted curve, cut into
+    // steps of d either way (so a straight line gets the arc-length rule's node count).
     std::vector<double> measure = rail.arc;
-    double d_measure = d;
     if (settings.segment_init == SegmentInit::Curvature) {
       for (std::size_t k = 1; k < measure.size(); ++k) {
         double turn = 0;
@@ -95,11 +93,9 @@ SegmentNodes initialise_segments(const RegionGraph& g, const LineSet& lines,
         measure[k] =
             measure[k - 1] + (rail.arc[k] - rail.arc[k - 1]) + settings.curvature_weight_mm * turn;
       }
-      // Same node count as the arc-length rule would give on a straight line of this measure.
-      d_measure = d;
     }
     const double total = measure.back();
-    int intervals = static_cast<int>(std::floor(total / d_measure)) + 1;  // N_nodes - 1
+    int intervals = static_cast<int>(std::floor(total / d)) + 1;  // N_nodes - 1
     if (seg.node0 == seg.node1) intervals = std::max(intervals, 3);
     const double d_prime = total / intervals;  // d_I'
     out.spacing_mm.push_back(rail.length() / intervals);
@@ -138,13 +134,8 @@ SegmentNodes initialise_segments(const RegionGraph& g, const LineSet& lines,
   detail::CellLists grid;  // nodes by cell at the start of a sweep, in index order
   for (int it = 0; it < settings.relax_iterations; ++it) {
     grid.clear();
-    auto key = [&](const Vector3d& x) {
-      const std::int64_t i = static_cast<std::int64_t>(std::floor(x.x() / cell)) & 0x1fffff;
-      const std::int64_t j = static_cast<std::int64_t>(std::floor(x.y() / cell)) & 0x1fffff;
-      const std::int64_t k = static_cast<std::int64_t>(std::floor(x.z() / cell)) & 0x1fffff;
-      return (i << 42) | (j << 21) | k;
-    };
-    for (std::size_t i = 0; i < pos.size(); ++i) grid[key(pos[i])].push_back(static_cast<int>(i));
+    for (std::size_t i = 0; i < pos.size(); ++i)
+      grid[detail::cell_key(pos[i], cell)].push_back(static_cast<int>(i));
     for (std::size_t s = 0; s < out.chains.size(); ++s) {
       auto& chain = out.chains[s];
       auto& arc = arcs[s];
@@ -164,7 +155,8 @@ SegmentNodes initialise_segments(const RegionGraph& g, const LineSet& lines,
         for (int dx = -1; dx <= 1; ++dx)
           for (int dy = -1; dy <= 1; ++dy)
             for (int dz = -1; dz <= 1; ++dz) {
-              const std::vector<int>* found = grid.find(key(pos[i] + cell * Vector3d(dx, dy, dz)));
+              const std::vector<int>* found =
+                  grid.find(detail::cell_key(pos[i] + cell * Vector3d(dx, dy, dz), cell));
               if (!found) continue;
               for (int j : *found) {
                 if (owner[j] == static_cast<int>(s) || j == chain[k - 1] || j == chain[k + 1])
@@ -188,7 +180,6 @@ SegmentNodes initialise_segments(const RegionGraph& g, const LineSet& lines,
       }
     }
   }
-  (void)n_junction;
   return out;
 }
 

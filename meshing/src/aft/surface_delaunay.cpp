@@ -103,13 +103,8 @@ class SurfaceDelaunayMesher {
       if (std::abs(winding) > M_PI) return false;  // goes once around the axis
     }
     double radius_sum = 0;
-    int n = 0;
-    for (const auto& e : in_.front) {
-      const Vector3d& p = N_.pos[e[0]];
-      radius_sum += std::hypot(p.x(), p.y());
-      ++n;
-    }
-    scale_ = n > 0 ? std::max(radius_sum / n, 1e-3) : 1.0;
+    for (const auto& e : in_.front) radius_sum += std::hypot(N_.pos[e[0]].x(), N_.pos[e[0]].y());
+    scale_ = std::max(radius_sum / in_.front.size(), 1e-3);  // (run() returned if it is empty)
     return true;
   }
 
@@ -120,7 +115,6 @@ class SurfaceDelaunayMesher {
     const Vector2d u = unwrapped(param);
     return {u.x() * scale_, u.y()};
   }
-  Vector2d param_of_plane(const Point& p) const { return {p.x() / scale_, p.y()}; }
 
   // The polygons keep the node order of the front; re-unwrap them against phi_ref_ so the
   // inside test and the plane agree.
@@ -227,13 +221,18 @@ class SurfaceDelaunayMesher {
     const std::vector<std::array<int, 3>>& start = *domain;
     tris_.resize(start.size());
     for (std::size_t t = 0; t < start.size(); ++t) set_triangle(static_cast<int>(t), start[t]);
+    lawson_flips(all_edges());
+    return true;
+  }
+
+  //! Every edge of the triangulation (undirected keys, sorted).
+  std::vector<std::uint64_t> all_edges() const {
     std::vector<std::uint64_t> all;
-    for (const auto& kv : owner_)
-      all.push_back(edge_key(edge_key_first(kv.first), edge_key_second(kv.first)));
+    for (const auto& t : tris_)
+      for (int k = 0; k < 3; ++k) all.push_back(edge_key(t[k], t[(k + 1) % 3]));
     std::sort(all.begin(), all.end());
     all.erase(std::unique(all.begin(), all.end()), all.end());
-    lawson_flips(all);
-    return true;
+    return all;
   }
 
   bool faces_out(int a, int b, int c) const {
@@ -246,17 +245,13 @@ class SurfaceDelaunayMesher {
   // angle rule, Delaunay's in the plane) and both new triangles face outwards.
   bool flip_if_better(int a, int b, std::vector<std::uint64_t>& queue) {
     if (constrained(a, b)) return false;
-    int t1 = owner_.count(directed_edge_key(a, b)) ? owner_.at(directed_edge_key(a, b)) : -1;
-    if (t1 < 0)
-      std::swap(a, b),
-          t1 = owner_.count(directed_edge_key(a, b)) ? owner_.at(directed_edge_key(a, b)) : -1;
+    int t1 = across(b, a);  // the owner of (a, b)
+    if (t1 < 0) std::swap(a, b), t1 = across(b, a);
     if (t1 < 0) return false;
     const int t2 = across(a, b);
     if (t2 < 0) return false;
     const int c = third(t1, a, b), d = third(t2, b, a);
-    if (c < 0 || d < 0 || c == d || owner_.count(directed_edge_key(c, d)) ||
-        owner_.count(directed_edge_key(d, c)))
-      return false;
+    if (c < 0 || d < 0 || c == d || across(d, c) >= 0 || across(c, d) >= 0) return false;
     const auto& P = N_.pos;
     const double before = std::min(min_angle(P[a], P[b], P[c]), min_angle(P[b], P[a], P[d]));
     const double after = std::min(min_angle(P[c], P[a], P[d]), min_angle(P[d], P[b], P[c]));
@@ -333,6 +328,16 @@ class SurfaceDelaunayMesher {
     std::array<int, 3> nodes;
   };
 
+  //! The surface point on the line origin + t dir, |t| <= reach, with the smallest |t|.
+  std::optional<SurfaceHit> nearest_hit(const Vector3d& origin, const Vector3d& dir,
+                                        double reach) const {
+    const auto hits = S_.intersect_segment(origin, dir, -reach, reach);
+    if (hits.empty()) return std::nullopt;
+    return *std::min_element(hits.begin(), hits.end(), [](const auto& p, const auto& q) {
+      return std::abs(p.t) < std::abs(q.t);
+    });
+  }
+
   // Non-ideal (Chew): min angle below 30°, or circumradius above the size bound, or the
   // triangle's centre farther from the surface than the chordal tolerance.
   std::optional<Candidate> non_ideal(const std::array<int, 3>& v) const {
@@ -349,14 +354,8 @@ class SurfaceDelaunayMesher {
       // Sagitta along the triangle normal (the closest-point projection can jump to another
       // part of the surface under the chin or behind an ear and report centimetres).
       const Vector3d n = (b - a).cross(c - a).normalized();
-      const auto hits = S_.intersect_segment((a + b + c) / 3.0, n, -radius, radius);
-      double sagitta = 0;
-      if (!hits.empty())
-        sagitta =
-            std::abs(std::min_element(hits.begin(), hits.end(), [](const auto& p, const auto& q) {
-                       return std::abs(p.t) < std::abs(q.t);
-                     })->t);
-      too_far = sagitta > in_.chordal_tolerance_mm;
+      const auto hit = nearest_hit((a + b + c) / 3.0, n, radius);
+      too_far = (hit ? std::abs(hit->t) : 0.0) > in_.chordal_tolerance_mm;
     }
     if (!too_big && !too_sharp && !too_far) return std::nullopt;
     return Candidate{radius, v};
@@ -371,16 +370,10 @@ class SurfaceDelaunayMesher {
     if (!cc) return std::nullopt;
     const auto& [centre, radius] = *cc;
     const Vector3d n = (b - a).cross(c - a).normalized();
-    const auto hits = S_.intersect_segment(centre, n, -radius, radius);
-    if (hits.empty()) {
-      const auto pr = S_.project(centre);  // the line only grazes the surface: project
-      if (!pr) return std::nullopt;
-      return pr->point;
-    }
-    return std::min_element(
-               hits.begin(), hits.end(),
-               [](const auto& p, const auto& q) { return std::abs(p.t) < std::abs(q.t); })
-        ->point;
+    if (const auto hit = nearest_hit(centre, n, radius)) return hit->point;
+    const auto pr = S_.project(centre);  // the line only grazes the surface: project
+    if (!pr) return std::nullopt;
+    return pr->point;
   }
 
   bool crowds(const Vector3d& x, const std::array<int, 3>& host, double clearance) const {
@@ -490,13 +483,9 @@ class SurfaceDelaunayMesher {
         mid + std::min(to_centre.norm(), shortest * std::sqrt(3.0) / 2) * to_centre.normalized();
     const Vector3d n =
         (N_.pos[v[1]] - N_.pos[v[0]]).cross(N_.pos[v[2]] - N_.pos[v[0]]).normalized();
-    const auto hits = S_.intersect_segment(x, n, -shortest, shortest);
-    if (hits.empty()) return std::nullopt;
-    const Vector3d on_surface =
-        std::min_element(hits.begin(), hits.end(), [](const auto& a, const auto& b) {
-          return std::abs(a.t) < std::abs(b.t);
-        })->point;
-    return std::make_pair(on_surface, 0.5 * shortest);
+    const auto hit = nearest_hit(x, n, shortest);
+    if (!hit) return std::nullopt;
+    return std::make_pair(hit->point, 0.5 * shortest);
   }
 
   // Inserts the surface circumcentre of triangle t if it is allowed (Chew), else the surface
@@ -617,33 +606,21 @@ class SurfaceDelaunayMesher {
             if (w != v) centroid += N_.pos[w], ++n;
         centroid /= n;
         const double reach = (centroid - N_.pos[v]).norm() + in_.unit_mm;
-        const auto hits = S_.intersect_segment(centroid, N_.normal[v], -reach, reach);
-        if (hits.empty()) continue;
-        const Vector3d target =
-            std::min_element(hits.begin(), hits.end(), [](const auto& p, const auto& q) {
-              return std::abs(p.t) < std::abs(q.t);
-            })->point;
+        const auto target = nearest_hit(centroid, N_.normal[v], reach);
+        if (!target) continue;
         const double before = star_min_angle(star[i]);
-        const Vector2d old_param = N_.params[v];
-        const Vector3d old_pos = N_.pos[v], old_normal = N_.normal[v];
-        if (!N_.move(v, unwrapped(param_of(target, old_param.x())), S_)) continue;
+        const NodeStore::Saved old = N_.save(v);
+        if (!N_.move(v, unwrapped(param_of(target->point, old.param.x())), S_)) continue;
         bool ok = inside_region(N_.params[v]) && star_min_angle(star[i]) > before + 1e-9 &&
                   !encroaches_segment(N_.pos[v]);
         for (int t : star[i]) ok = ok && faces_out(tris_[t][0], tris_[t][1], tris_[t][2]);
         if (ok) {
           ++moved;
         } else {
-          N_.params[v] = old_param;
-          N_.pos[v] = old_pos;
-          N_.normal[v] = old_normal;
+          N_.restore(v, old);
         }
       }
-      std::vector<std::uint64_t> all;
-      for (const auto& t : tris_)
-        for (int k = 0; k < 3; ++k) all.push_back(edge_key(t[k], t[(k + 1) % 3]));
-      std::sort(all.begin(), all.end());
-      all.erase(std::unique(all.begin(), all.end()), all.end());
-      lawson_flips(all);
+      lawson_flips(all_edges());
       if (moved == 0) break;
     }
   }

@@ -41,7 +41,7 @@ void TriangleCells::insert(int t, const std::array<int, 3>& f, std::span<const E
   for (std::int64_t x = box.min().x(); x <= box.max().x(); ++x)
     for (std::int64_t y = box.min().y(); y <= box.max().y(); ++y)
       for (std::int64_t z = box.min().z(); z <= box.max().z(); ++z) {
-        const std::int64_t k = key(x, y, z);
+        const std::int64_t k = pack_cell(x, y, z);
         std::vector<int>& list = lists_[k];
         if (!list.empty() && list.back() == t) continue;
         list.push_back(t);
