@@ -177,14 +177,14 @@ class Remesher {
   }
   double target(int v, int w) const { return scale_ * 0.5 * (vs_[v].sq + vs_[w].sq); }
   bool face_ok(int f) const;
-  bool faces_ok(const std::vector<int>& fs) const {
+  bool faces_ok(std::span<const int> fs) const {
     for (int f : fs)
       if (!face_ok(f)) return false;
     return !embed_check_ || locally_embedded(fs);
   }
   // No changed face intersects a live face at one of its corners: prevents
   // folds and local self-intersections instead of repairing them afterwards.
-  bool locally_embedded(const std::vector<int>& fs) const;
+  bool locally_embedded(std::span<const int> fs) const;
   // A face near a changed one, with what the pair tests need of it.
   struct NearFace {
     int face;
@@ -616,7 +616,7 @@ bool Remesher::face_ok(int f) const {
   return true;
 }
 
-bool Remesher::locally_embedded(const std::vector<int>& fs) const {
+bool Remesher::locally_embedded(std::span<const int> fs) const {
   // Each changed face against each live face sharing a corner with it, every pair once. The
   // faces around are gathered first, each with its box and normal: a face is met from up to
   // three changed faces, and two changed faces from both sides (~70 pairs per vertex move; the

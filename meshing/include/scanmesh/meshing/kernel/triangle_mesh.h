@@ -22,8 +22,9 @@
 namespace scanmesh::kernel {
 
 //! A short list of indices held inline, spilling to the heap past N: what edge_faces and
-//! neighbours return. A remesh asks for them millions of times, and a std::vector each was
-//! ~7 % of its time in malloc / free (perf, lion-head at its own vertex count).
+//! neighbours return, and each vertex's face list. A remesh asks for the lists millions of
+//! times, and a std::vector each was ~7 % of its time in malloc / free (perf, lion-head at its
+//! own vertex count); a face list in place saves the fans' assembly a look-up per vertex.
 template <std::size_t N>
 class SmallIndexList {
  public:
@@ -36,21 +37,40 @@ class SmallIndexList {
     }
     ++n_;
   }
+  //! Removes the element at `at`, keeping the order of the others.
+  void erase(const int* at) {
+    int* d = data();
+    std::copy(d + (at - d) + 1, d + n_, d + (at - d));
+    --n_;
+    if (n_ >= N) {
+      heap_.pop_back();
+      if (n_ == N) {
+        std::copy(heap_.begin(), heap_.end(), inline_.begin());
+        heap_.clear();
+      }
+    }
+  }
+  void clear() {
+    n_ = 0;
+    heap_.clear();
+  }
   std::size_t size() const { return n_; }
   bool empty() const { return n_ == 0; }
   int operator[](std::size_t i) const { return data()[i]; }
+  const int* data() const { return n_ <= N ? inline_.data() : heap_.data(); }
   const int* begin() const { return data(); }
   const int* end() const { return data() + n_; }
   operator std::vector<int>() const { return std::vector<int>(begin(), end()); }
 
  private:
-  const int* data() const { return n_ <= N ? inline_.data() : heap_.data(); }
+  int* data() { return n_ <= N ? inline_.data() : heap_.data(); }
   std::array<int, N> inline_;
   std::vector<int> heap_;
   std::size_t n_ = 0;
 };
 using EdgeFaceList = SmallIndexList<6>;    //!< two faces per manifold edge, a few on a seam
 using NeighbourList = SmallIndexList<16>;  //!< a ring
+using VertexFaceList = SmallIndexList<7>;  //!< six faces around most vertices of a surface
 
 //! The quad around an edge v-w with two faces: f1 = (v, w, a) and f2 = (w, v, b), both
 //! counter-clockwise; a-b is the other diagonal.
@@ -87,7 +107,7 @@ class TriangleMesh {
   std::vector<Eigen::Vector3d> pos;
   std::vector<std::array<int, 3>> tri;
   std::vector<int> label;                //!< per face
-  std::vector<std::vector<int>> vfaces;  //!< per vertex: live incident faces
+  std::vector<VertexFaceList> vfaces;  //!< per vertex: live incident faces
   std::vector<char> face_alive, vertex_alive;
 
   int vertex_count() const { return live_vertices_; }
