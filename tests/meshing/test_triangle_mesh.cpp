@@ -224,5 +224,38 @@ TEST(KernelTriangleMesh, ConstructionRefusesBadTriangles) {
   EXPECT_EQ(m.vertex_count(), 3);  // the vertex in no triangle is not live
 }
 
+TEST(KernelSmallIndexList, EraseKeepsTheOrderAcrossTheInlineLimit) {
+  // Twelve faces spill a seven-place list to the heap; erasing from the front, the middle and
+  // the back must give what a std::vector gives, also when the list moves back in place.
+  VertexFaceList list;
+  std::vector<int> expected;
+  for (int f = 0; f < 12; ++f) {
+    list.push_back(10 * f);
+    expected.push_back(10 * f);
+  }
+  for (const std::size_t at : {0u, 5u, 9u, 3u, 0u, 6u, 2u, 1u, 0u, 2u, 1u, 0u}) {
+    list.erase(list.begin() + at);
+    expected.erase(expected.begin() + static_cast<std::ptrdiff_t>(at));
+    ASSERT_EQ(std::vector<int>(list), expected) << "after erasing place " << at;
+  }
+  EXPECT_TRUE(list.empty());
+  list.push_back(7);
+  EXPECT_EQ(std::vector<int>(list), std::vector<int>{7});
+}
+
+TEST(KernelWedges, APinchVertexKeepsItsLargestWedge) {
+  // Vertex 0 carries a fan of three faces (ring 1..4) and, touching it only at 0, a fan of two
+  // (ring 5..7): the two faces of the smaller wedge are off, in the order given.
+  const std::vector<Vector3d> p{{0, 0, 0},  {1, 0, 0},  {1, 1, 0}, {0, 1, 0},
+                                {-1, 1, 0}, {0, 0, 1},  {1, 0, 1}, {0, 1, 1}};
+  const std::vector<std::array<int, 3>> t{{0, 1, 2}, {0, 5, 6}, {0, 2, 3}, {0, 6, 7}, {0, 3, 4}};
+  const TriangleMesh m(p, t);
+  const std::vector<int> star(m.vfaces[0].begin(), m.vfaces[0].end());
+  EXPECT_EQ(faces_off_largest_wedge(m.tri, star, 0), (std::vector<int>{1, 3}));
+  // A manifold fan has one wedge: nothing is off.
+  const TriangleMesh fan = hexagon_fan();
+  EXPECT_TRUE(faces_off_largest_wedge(fan.tri, fan.vfaces[0], 0).empty());
+}
+
 }  // namespace
 }  // namespace scanmesh::kernel

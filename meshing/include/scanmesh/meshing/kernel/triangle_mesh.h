@@ -107,7 +107,7 @@ class TriangleMesh {
   std::vector<Eigen::Vector3d> pos;
   std::vector<std::array<int, 3>> tri;
   std::vector<int> label;                //!< per face
-  std::vector<VertexFaceList> vfaces;  //!< per vertex: live incident faces
+  std::vector<VertexFaceList> vfaces;    //!< per vertex: live incident faces
   std::vector<char> face_alive, vertex_alive;
 
   int vertex_count() const { return live_vertices_; }
