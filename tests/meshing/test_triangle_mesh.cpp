@@ -246,8 +246,8 @@ TEST(KernelSmallIndexList, EraseKeepsTheOrderAcrossTheInlineLimit) {
 TEST(KernelWedges, APinchVertexKeepsItsLargestWedge) {
   // Vertex 0 carries a fan of three faces (ring 1..4) and, touching it only at 0, a fan of two
   // (ring 5..7): the two faces of the smaller wedge are off, in the order given.
-  const std::vector<Vector3d> p{{0, 0, 0},  {1, 0, 0},  {1, 1, 0}, {0, 1, 0},
-                                {-1, 1, 0}, {0, 0, 1},  {1, 0, 1}, {0, 1, 1}};
+  const std::vector<Vector3d> p{{0, 0, 0},  {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                                {-1, 1, 0}, {0, 0, 1}, {1, 0, 1}, {0, 1, 1}};
   const std::vector<std::array<int, 3>> t{{0, 1, 2}, {0, 5, 6}, {0, 2, 3}, {0, 6, 7}, {0, 3, 4}};
   const TriangleMesh m(p, t);
   const std::vector<int> star(m.vfaces[0].begin(), m.vfaces[0].end());
