@@ -327,7 +327,15 @@ DataBorderMode parse_data_border_mode(std::string_view name) {
 }
 
 const char* to_string(DataBorderMode mode) {
-  return mode == DataBorderMode::On ? "on" : mode == DataBorderMode::Off ? "off" : "auto";
+  switch (mode) {  // no default: -Wswitch names a mode added without a name here
+    case DataBorderMode::On:
+      return "on";
+    case DataBorderMode::Off:
+      return "off";
+    case DataBorderMode::Auto:
+      break;
+  }
+  return "auto";
 }
 
 bool misses_part_of_the_turn(const ScanSurface& surface) {

@@ -206,11 +206,13 @@ class SurfaceDelaunayMesher {
     const auto& v = tris_[t];
     for (int k = 0; k < 3; ++k) owner_.erase(directed_edge_key(v[k], v[(k + 1) % 3]));
   }
-  //! The triangle on the other side of directed edge (a, b): the owner of (b, a), or -1.
-  int across(int a, int b) const {
-    const auto it = owner_.find(directed_edge_key(b, a));
+  //! The triangle with the directed edge (a, b), or -1.
+  int owner(int a, int b) const {
+    const auto it = owner_.find(directed_edge_key(a, b));
     return it == owner_.end() ? -1 : it->second;
   }
+  //! The triangle on the other side of directed edge (a, b): the owner of (b, a), or -1.
+  int across(int a, int b) const { return owner(b, a); }
   bool constrained(int a, int b) const { return constraint_.count(edge_key(a, b)) > 0; }
 
   bool build_surface_triangulation() {
@@ -245,13 +247,13 @@ class SurfaceDelaunayMesher {
   // angle rule, Delaunay's in the plane) and both new triangles face outwards.
   bool flip_if_better(int a, int b, std::vector<std::uint64_t>& queue) {
     if (constrained(a, b)) return false;
-    int t1 = across(b, a);  // the owner of (a, b)
-    if (t1 < 0) std::swap(a, b), t1 = across(b, a);
+    int t1 = owner(a, b);
+    if (t1 < 0) std::swap(a, b), t1 = owner(a, b);
     if (t1 < 0) return false;
-    const int t2 = across(a, b);
+    const int t2 = owner(b, a);
     if (t2 < 0) return false;
     const int c = third(t1, a, b), d = third(t2, b, a);
-    if (c < 0 || d < 0 || c == d || across(d, c) >= 0 || across(c, d) >= 0) return false;
+    if (c < 0 || d < 0 || c == d || owner(c, d) >= 0 || owner(d, c) >= 0) return false;
     const auto& P = N_.pos;
     const double before = std::min(min_angle(P[a], P[b], P[c]), min_angle(P[b], P[a], P[d]));
     const double after = std::min(min_angle(P[c], P[a], P[d]), min_angle(P[d], P[b], P[c]));

@@ -289,6 +289,7 @@ Mesh TriangleMesh::to_mesh(std::vector<int>* old_to_new) const {
 
 std::vector<int> faces_off_largest_wedge(std::span<const std::array<int, 3>> tri,
                                          std::span<const int> star, int v) {
+  if (star.size() < 2) return {};  // one face or none: one wedge at most
   auto share_edge_at_v = [&](int f, int g) {
     for (int a : tri[f])
       if (a != v && (tri[g][0] == a || tri[g][1] == a || tri[g][2] == a)) return true;

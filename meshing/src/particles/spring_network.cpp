@@ -1735,12 +1735,12 @@ double particles_for_area(double area, double edge, long long chi) {
   return area / (std::sqrt(3.0) / 2.0 * edge * edge) + static_cast<double>(chi);
 }
 
-bool same_topology(const SpringNetwork& net, const TopologyStats& reference, int components) {
+bool same_topology(const SpringNetwork& net, const TopologyStats& reference) {
   const Mesh m = net.mesh();
   const TopologyStats s = topology_stats(m);
   return net.converged() && s.boundary_edges == 0 && s.nonmanifold_edges == 0 &&
          s.euler_characteristic == reference.euler_characteristic &&
-         s.components == static_cast<std::size_t>(components);
+         s.components == reference.components;
 }
 
 // The layered start: marching tetrahedra at 2^k R relaxed and subdivided 1:4 level by level.
@@ -1753,7 +1753,6 @@ SpringNetwork layered_network(const ImplicitSurface& surface, const ParticleOpti
   // mesh has the fine one's topology (closed, same components and Euler characteristic) and
   // enough vertices is relaxed, then subdivided 1:4 and relaxed again at half the length.
   const TopologyStats fine_stats = topology_stats(fine);
-  const int fine_components = static_cast<int>(fine_stats.components);
   int level = 0;
   Mesh start = fine;
   if (fine_stats.boundary_edges == 0)
@@ -1763,8 +1762,8 @@ SpringNetwork layered_network(const ImplicitSurface& surface, const ParticleOpti
       const TopologyStats cs = topology_stats(coarse);
       if (cs.boundary_edges != 0 || cs.nonmanifold_edges != 0 ||
           cs.euler_characteristic != fine_stats.euler_characteristic ||
-          static_cast<int>(cs.components) != fine_components ||
-          coarse.vertex_count() < 150u * static_cast<std::size_t>(fine_components))
+          cs.components != fine_stats.components ||
+          coarse.vertex_count() < 150u * fine_stats.components)
         continue;
       level = k;
       start = coarse;
@@ -1785,7 +1784,7 @@ SpringNetwork layered_network(const ImplicitSurface& surface, const ParticleOpti
     const TopologyStats rs = topology_stats(relaxed);
     if (!net.converged() || rs.boundary_edges != 0 ||
         rs.euler_characteristic != fine_stats.euler_characteristic ||
-        static_cast<int>(rs.components) != fine_components) {
+        rs.components != fine_stats.components) {
       start = fine;  // the coarse level did not settle: start again from the fine mesh
       break;
     }
@@ -1811,7 +1810,7 @@ SpringNetwork layered_network(const ImplicitSurface& surface, const ParticleOpti
       const TopologyStats ss = topology_stats(second);
       if (again.converged() && ss.boundary_edges == 0 &&
           ss.euler_characteristic == fine_stats.euler_characteristic &&
-          static_cast<int>(ss.components) == fine_components)
+          ss.components == fine_stats.components)
         start = subdivide(second, surface);
     }
   }
@@ -1933,7 +1932,7 @@ std::vector<CoarseCandidate> coarse_candidates(const ImplicitSurface& surface,
   if (source.triangles.empty() || source_stats.boundary_edges != 0 ||
       source_stats.nonmanifold_edges != 0 ||
       source_stats.euler_characteristic != fine_stats.euler_characteristic ||
-      static_cast<int>(source_stats.components) != components)
+      source_stats.components != fine_stats.components)
     source = fine;
   {
     ParticleOptions half = options;
@@ -1943,7 +1942,7 @@ std::vector<CoarseCandidate> coarse_candidates(const ImplicitSurface& surface,
     half.progress = nullptr;
     SpringNetwork seed(source, half);
     *iterations += seed.relax(surface);
-    if (!same_topology(seed, fine_stats, components)) return out;
+    if (!same_topology(seed, fine_stats)) return out;
     source = seed.mesh();
   }
   // The area from the seed subdivided once and projected (the marching-tetrahedra mesh's
@@ -1965,7 +1964,7 @@ std::vector<CoarseCandidate> coarse_candidates(const ImplicitSurface& surface,
       *iterations += net.relax(surface, static_cast<std::size_t>(count));
       net.spread_evenly(surface, 200);
       *iterations += net.relax(surface, static_cast<std::size_t>(count));
-      if (!same_topology(net, fine_stats, components)) continue;
+      if (!same_topology(net, fine_stats)) continue;
       Mesh mesh = net.mesh();
       const double score = handed_down_spread(mesh, n, wanted, chi);
       out.push_back({score, n, std::move(mesh)});
@@ -2022,7 +2021,7 @@ SpringNetwork relaxed_network(const ImplicitSurface& surface, const ParticleOpti
       last.max_iterations = std::min(options.max_iterations, 500);
       SpringNetwork net(subdivide_n(candidates[i].mesh, candidates[i].n, surface), last);
       total += net.relax(surface);
-      if (same_topology(net, fine_stats, components)) keep_if_better(std::move(net));
+      if (same_topology(net, fine_stats)) keep_if_better(std::move(net));
     }
   }
   if (!best || best_uniformity.first < options.subdivision_accept) {

@@ -333,9 +333,9 @@ class Remesher {
   bool raise_star_min_angle(int v);          // pattern search on the surface / the segment
   bool flip_raises_min_angle(int v, int w);  // applied when it does, at a bounded valence cost
   void polish_angles();
+  std::vector<int> faces_below(double limit) const;  // live faces, min angle under limit
   //! Up to `rounds` rounds of star moves and angle flips over the faces with a min angle below
   //! `limit` (rad); returns how many are left.
-  std::vector<int> faces_below(double limit) const;  // live faces, min angle under limit
   std::size_t polish_below(double limit, int rounds);
   void report(const std::string& phase, double f) const {
     if (o_.progress) o_.progress(phase, f);
