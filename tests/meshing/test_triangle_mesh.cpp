@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <array>
+#include <stdexcept>
 #include <vector>
 
 #include "scanmesh/core/errors.h"
@@ -138,6 +139,33 @@ TEST(KernelTriangleMesh, SplitHalvesEveryFaceOfAnInteriorEdge) {
   EXPECT_EQ(oriented_faces(m), before);
   EXPECT_TRUE(m.vfaces[u].empty());
   expect_adjacency_consistent(m);
+}
+
+TEST(KernelTriangleMesh, ATrialRolledBackLeavesTheArraysAsBefore) {
+  // A trial as the AFT's small-angle repair makes one: split, then flip at the new vertex,
+  // both undone; truncate drops what the trial added, sort_faces gives the lists their order.
+  TriangleMesh m = hexagon_fan();
+  const auto before = oriented_faces(m);
+  const std::size_t faces = m.tri.size(), vertices = m.vfaces.size();
+  const int u = m.add_vertex({0.5, 0.0, 0});
+  const EdgeSplit s = m.split(0, 1, u);
+  const auto flipped = m.flip(u, 2);
+  ASSERT_TRUE(flipped);
+  m.undo(*flipped);
+  m.undo(s);
+  EXPECT_THROW(m.truncate(faces, vertices - 1), std::logic_error);  // vertex 6 has faces
+  m.truncate(faces, vertices);
+  EXPECT_EQ(m.tri.size(), faces);
+  EXPECT_EQ(m.vfaces.size(), vertices);
+  EXPECT_EQ(m.vertex_count(), 7);
+  EXPECT_EQ(oriented_faces(m), before);
+  for (int v = 0; v < 7; ++v) m.sort_faces(v);
+  for (int v = 0; v < 7; ++v) EXPECT_TRUE(std::is_sorted(m.vfaces[v].begin(), m.vfaces[v].end()));
+  expect_adjacency_consistent(m);
+  // A live face past the mark is refused: the caller has not undone everything.
+  const int w = m.add_vertex({0.5, 0.0, 0});
+  m.split(0, 1, w);
+  EXPECT_THROW(m.truncate(faces, vertices), std::logic_error);
 }
 
 TEST(KernelTriangleMesh, SplitOfANonManifoldEdgeHalvesEachPage) {

@@ -14,8 +14,10 @@
 #include <cstring>
 #include <unordered_map>
 #include <unordered_set>
+#include <variant>
 
 #include "aft_internal.h"
+#include "scanmesh/meshing/kernel/triangle_mesh.h"
 #include "scanmesh/meshing/mesh_check.h"
 
 namespace scanmesh::aft::detail {
@@ -25,7 +27,6 @@ using Eigen::Vector3d;
 
 namespace {
 
-constexpr std::array<int, 3> kDead{-1, -1, -1};
 // A Steiner point whose incident triangles all have at least this minimum angle is left where
 // it is: the repair's goal is 20 deg, and moving such a point only trades good angles.
 const double kSettledAngle = 30.0 * M_PI / 180;
@@ -61,15 +62,14 @@ class Repair {
         C_(constraint),
         fixed_(boundary_nodes),
         deviation_goal_(deviation_goal),
+        m_(store.pos, T, "small-angle repair"),
         grid_(TriangleCells::cell_size_for(T, store.pos)) {
-    vt_.resize(S_.pos.size());
-    for (std::size_t t = 0; t < T_.size(); ++t)
-      for (int v : T_[t]) vt_[v].push_back(static_cast<int>(t));
-    for (std::size_t t = 0; t < T_.size(); ++t) insert(static_cast<int>(t));
+    m_.label = labels;
+    for (std::size_t t = 0; t < m_.tri.size(); ++t) insert(static_cast<int>(t));
   }
 
   double tri_min(int t) const {
-    const auto& f = T_[t];
+    const auto& f = m_.tri[t];
     return min_angle(S_.pos[f[0]], S_.pos[f[1]], S_.pos[f[2]]);
   }
 
@@ -79,7 +79,10 @@ class Repair {
     if (tri_min(t) < goal && !forced(t)) return true;
     return excess(t) > 0 && !beyond_reach_.count(corners(t));
   }
-  Corners corners(int t) const { return {{S_.pos[T_[t][0]], S_.pos[T_[t][1]], S_.pos[T_[t][2]]}}; }
+  Corners corners(int t) const {
+    const auto& f = m_.tri[t];
+    return {{S_.pos[f[0]], S_.pos[f[1]], S_.pos[f[2]]}};
+  }
 
   // How far the triangle lies beyond the deviation goal (mm; 0 within it or without a goal).
   // Its samples are those of the quality report's Hausdorff distance (the points of the
@@ -87,8 +90,8 @@ class Repair {
   // surface from its interpolated (phi, h). Cached by the corner points, as the candidates
   // re-score the same neighbourhood triangles.
   double excess(int t) const {
-    if (deviation_goal_ <= 0 || T_[t][0] < 0) return 0;
-    const auto& f = T_[t];
+    if (deviation_goal_ <= 0 || !m_.face_alive[t]) return 0;
+    const auto& f = m_.tri[t];
     const Vector3d &a = S_.pos[f[0]], &b = S_.pos[f[1]], &c = S_.pos[f[2]];
     // A smooth patch deviates from its flat triangle by about the circumradius times the
     // tilt of the corner normals against the face's; triangles well within the goal by that
@@ -143,7 +146,7 @@ class Repair {
 
   // True if the smallest angle of t sits between two constraint edges: the input fixes it.
   bool forced(int t) const {
-    const auto& f = T_[t];
+    const auto& f = m_.tri[t];
     const std::array<double, 3> angles = corner_angles(S_.pos, f);
     const int k = static_cast<int>(std::min_element(angles.begin(), angles.end()) - angles.begin());
     return C_.count(edge_key(f[k], f[(k + 1) % 3])) && C_.count(edge_key(f[k], f[(k + 2) % 3]));
@@ -153,23 +156,19 @@ class Repair {
     RepairStats st;
     for (int round = 0; round < rounds; ++round) {
       bool changed = false;
-      for (std::size_t t = 0; t < T_.size(); ++t) {
-        if (T_[t][0] < 0 || !wanted(static_cast<int>(t), goal)) continue;
+      for (std::size_t t = 0; t < m_.tri.size(); ++t) {
+        if (!m_.face_alive[t] || !wanted(static_cast<int>(t), goal)) continue;
         if (improve(static_cast<int>(t), goal, st)) changed = true;
       }
       if (!changed) break;
     }
-    // Compact: drop dead triangles.
-    std::size_t w = 0;
-    for (std::size_t t = 0; t < T_.size(); ++t)
-      if (T_[t][0] >= 0) {
-        T_[w] = T_[t];
-        L_[w] = L_[t];
-        ++w;
-      }
-    T_.resize(w);
-    L_.resize(w);
-    for (std::size_t t = 0; t < T_.size(); ++t) {
+    // The live triangles, in index order, back to the caller.
+    T_.clear();
+    L_.clear();
+    for (std::size_t t = 0; t < m_.tri.size(); ++t) {
+      if (!m_.face_alive[t]) continue;
+      T_.push_back(m_.tri[t]);
+      L_.push_back(m_.label[t]);
       const double m = tri_min(static_cast<int>(t));
       if (m < report) (forced(static_cast<int>(t)) ? st.forced_below_goal : st.left_below_goal)++;
       if (excess(static_cast<int>(t)) > 0) ++st.left_above_deviation_goal;
@@ -178,8 +177,11 @@ class Repair {
   }
 
  private:
+  // A candidate's changes, undone in reverse by rollback(): the kernel's operations, the
+  // Steiner points' moves and the triangles' filings in grid_.
+  using Operation = std::variant<kernel::EdgeQuad, kernel::EdgeSplit, kernel::EdgeCollapse>;
   struct Journal {
-    std::vector<std::pair<int, std::array<int, 3>>> tris;
+    std::vector<Operation> operations;
     struct Moved {
       int v;
       NodeStore::Saved old;
@@ -189,58 +191,55 @@ class Repair {
     std::size_t n_tris = 0, n_verts = 0;
   };
 
+  // The triangles an operation left live with new corners.
+  static std::vector<int> changed_by(const Operation& op) {
+    if (const auto* q = std::get_if<kernel::EdgeQuad>(&op)) return {q->f1, q->f2};
+    if (const auto* sp = std::get_if<kernel::EdgeSplit>(&op)) {
+      std::vector<int> ts = sp->changed;
+      ts.insert(ts.end(), sp->added.begin(), sp->added.end());
+      return ts;
+    }
+    return std::get<kernel::EdgeCollapse>(op).moved;
+  }
+  void undo(const Operation& op) {
+    std::visit([&](const auto& o) { m_.undo(o); }, op);
+  }
+  // Records an operation the mesh just made and files its changed triangles in grid_.
+  void record(Operation op) {
+    for (int t : changed_by(op)) insert(t);
+    journal_.operations.push_back(std::move(op));
+  }
+
   // The triangles by 3D cell (grid_), for the intersection test of changed ones; a candidate's
   // filings are taken back with it.
   void insert(int t) {
-    if (T_[t][0] >= 0) grid_.insert(t, T_[t], S_.pos, &journal_.cells);
+    if (m_.face_alive[t]) grid_.insert(t, m_.tri[t], S_.pos, &journal_.cells);
   }
   // Pairs of intersecting triangles involving the triangles changed since begin().
   int new_intersections() const {
     std::vector<int> changed;
-    for (const auto& [t, f] : journal_.tris)
-      if (T_[t][0] >= 0) changed.push_back(t);
+    for (const Operation& op : journal_.operations)
+      for (int t : changed_by(op))
+        if (m_.face_alive[t]) changed.push_back(t);
     for (const auto& m : journal_.moved)
-      for (int t : vt_[m.v]) changed.push_back(t);
+      for (int t : m_.vfaces[m.v]) changed.push_back(t);
     std::sort(changed.begin(), changed.end());
     changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
     int hits = 0;
     // A cell may list a triangle once per filing; any_near's stamps meet it once per query.
     for (int c : changed)
-      grid_.any_near(T_[c], c, T_.size(), S_.pos, [&](int u) {
-        if (T_[u][0] >= 0 && triangles_intersect(S_.pos, T_[c], T_[u])) ++hits;
+      grid_.any_near(m_.tri[c], c, m_.tri.size(), S_.pos, [&](int u) {
+        if (m_.face_alive[u] && triangles_intersect(S_.pos, m_.tri[c], m_.tri[u])) ++hits;
         return false;
       });
     return hits;
   }
 
-  // Takes t off its corners' triangle lists, sets it to f and lists it again if alive.
-  void relink(int t, const std::array<int, 3>& f) {
-    if (T_[t][0] >= 0)
-      for (int v : T_[t]) {
-        auto& l = vt_[v];
-        l.erase(std::find(l.begin(), l.end(), t));
-      }
-    T_[t] = f;
-    if (f[0] >= 0)
-      for (int v : f) vt_[v].push_back(t);
-  }
-  void set_tri(int t, const std::array<int, 3>& f) {
-    journal_.tris.push_back({t, T_[t]});
-    relink(t, f);
-    insert(t);
-  }
-  int add_tri(const std::array<int, 3>& f, int label) {
-    T_.push_back(kDead);
-    L_.push_back(label);
-    const int t = static_cast<int>(T_.size()) - 1;
-    set_tri(t, f);
-    return t;
-  }
   int add_vertex(const Vector3d& near_point, double near_phi) {
     const auto pr = surf_.project(near_point);
     if (!pr) return -1;
     const int v = S_.add(param_of(pr->point, near_phi), surf_);
-    if (v >= 0) vt_.emplace_back();
+    if (v >= 0) m_.add_vertex(S_.pos[v]);
     return v;
   }
   // Moves Steiner point v to (phi, h), journalled; false if the surface is undefined there.
@@ -248,31 +247,35 @@ class Repair {
     const Journal::Moved old{v, S_.save(v)};
     if (!S_.move(v, param, surf_)) return false;
     journal_.moved.push_back(old);
-    for (int t : vt_[v]) insert(t);
+    for (int t : m_.vfaces[v]) insert(t);
     return true;
   }
   void begin() {
     journal_ = Journal{};
-    journal_.n_tris = T_.size();
+    journal_.n_tris = m_.tri.size();
     journal_.n_verts = S_.pos.size();
   }
   void rollback() {
-    for (auto it = journal_.tris.rbegin(); it != journal_.tris.rend(); ++it)
-      relink(it->first, it->second);
+    std::vector<int> touched;  // corners of the triangles the operations changed or removed
+    for (auto it = journal_.operations.rbegin(); it != journal_.operations.rend(); ++it) {
+      std::vector<int> ts = changed_by(*it);
+      if (const auto* c = std::get_if<kernel::EdgeCollapse>(&*it))
+        ts.insert(ts.end(), c->removed.begin(), c->removed.end());
+      for (int t : ts)
+        for (int v : m_.tri[t]) touched.push_back(v);
+      undo(*it);
+    }
     for (auto it = journal_.moved.rbegin(); it != journal_.moved.rend(); ++it)
       S_.restore(it->v, it->old);
     grid_.take_back(journal_.cells);
-    T_.resize(journal_.n_tris);
-    L_.resize(journal_.n_tris);
+    m_.truncate(journal_.n_tris, journal_.n_verts);
     S_.params.resize(journal_.n_verts);
     S_.pos.resize(journal_.n_verts);
     S_.normal.resize(journal_.n_verts);
-    vt_.resize(journal_.n_verts);
-    // vt_ lists are restored by the reverse set_tri, but their order may differ: sort them so
-    // that the outcome does not depend on the history of rejected candidates.
-    for (const auto& [t, f] : journal_.tris)
-      for (int v : f)
-        if (v >= 0 && v < static_cast<int>(vt_.size())) std::sort(vt_[v].begin(), vt_[v].end());
+    // The undone operations restore the triangles but not the order of their corners' lists:
+    // sorted, so that the outcome does not depend on the history of rejected candidates.
+    for (int v : touched)
+      if (v < static_cast<int>(m_.vfaces.size())) m_.sort_faces(v);
     journal_ = Journal{};
   }
 
@@ -289,7 +292,7 @@ class Repair {
   // the surface normal under its centroid, by the smoothing's margin.
   bool faces_out(int t) const {
     if (ccw_in_parameters(t)) return true;
-    const auto& f = T_[t];
+    const auto& f = m_.tri[t];
     return agrees_with_surface(S_.pos[f[0]], S_.pos[f[1]], S_.pos[f[2]]);
   }
   // The normal of triangle (a, b, c) against the surface normal under its centroid. The
@@ -307,7 +310,7 @@ class Repair {
     return agrees;
   }
   bool ccw_in_parameters(int t) const {
-    const auto& f = T_[t];
+    const auto& f = m_.tri[t];
     const Vector2d& a = S_.params[f[0]];
     auto rel = [&](int v) {
       const Vector2d& p = S_.params[v];
@@ -324,8 +327,8 @@ class Repair {
     const Vector3d& n = S_.normal[v];
     const Vector3d t1 = n.unitOrthogonal(), t2 = n.cross(t1);
     double sum = 0;
-    for (int t : vt_[v]) {
-      const auto& f = T_[t];
+    for (int t : m_.vfaces[v]) {
+      const auto& f = m_.tri[t];
       int k = 0;
       while (f[k] != v) ++k;
       const Vector3d a = S_.pos[f[(k + 1) % 3]] - S_.pos[v], b = S_.pos[f[(k + 2) % 3]] - S_.pos[v];
@@ -335,90 +338,46 @@ class Repair {
     return std::fabs(sum - 2 * M_PI) < 1e-3;
   }
 
-  std::vector<int> edge_tris(int p, int q) const {
-    std::vector<int> r;
-    for (int t : vt_[p])
-      if (T_[t][0] == q || T_[t][1] == q || T_[t][2] == q) r.push_back(t);
-    return r;
-  }
-  bool has_edge(int p, int q) const { return !edge_tris(p, q).empty(); }
+  bool has_edge(int p, int q) const { return m_.edge_face_count(p, q) > 0; }
   std::vector<int> neighbours(int v) const {
-    std::vector<int> r;
-    for (int t : vt_[v])
-      for (int w : T_[t])
-        if (w != v) r.push_back(w);
+    const kernel::NeighbourList nb = m_.neighbours(v);
+    std::vector<int> r(nb.begin(), nb.end());
     std::sort(r.begin(), r.end());
-    r.erase(std::unique(r.begin(), r.end()), r.end());
     return r;
   }
   bool steiner(int v) const { return v >= static_cast<int>(fixed_); }
 
-  // Edge p-q of two triangles (p, q, r) and (q, p, s) becomes r-s.
+  // Edge p-q of two triangles (p, q, r) and (q, p, s) of one region becomes r-s.
   bool flip(int p, int q) {
     if (C_.count(edge_key(p, q))) return false;
-    const auto ts = edge_tris(p, q);
-    if (ts.size() != 2 || L_[ts[0]] != L_[ts[1]]) return false;
-    int t1 = ts[0], t2 = ts[1];
-    auto rot = [&](int t, int first) {
-      std::array<int, 3> f = T_[t];
-      while (f[0] != first) std::rotate(f.begin(), f.begin() + 1, f.end());
-      return f;
-    };
-    std::array<int, 3> f1 = rot(t1, p);
-    if (f1[1] != q) {
-      std::swap(t1, t2);
-      f1 = rot(t1, p);
-      if (f1[1] != q) return false;
-    }
-    const std::array<int, 3> f2 = rot(t2, q);
-    if (f2[1] != p) return false;
-    const int r = f1[2], s = f2[2];
-    if (r == s || has_edge(r, s)) return false;
-    set_tri(t1, {r, p, s});
-    set_tri(t2, {s, q, r});
+    const auto quad = m_.quad(p, q);
+    if (!quad || m_.label[quad->f1] != m_.label[quad->f2]) return false;
+    const auto& f2 = m_.tri[quad->f2];
+    const int k = f2[0] == q ? 0 : (f2[1] == q ? 1 : 2);
+    if (f2[(k + 1) % 3] != p || has_edge(quad->a, quad->b)) return false;
+    m_.flip(*quad);
+    record(*quad);
     return true;
   }
 
   // Steiner point q merges into p (p keeps its place).
   bool collapse(int q, int p) {
     if (!steiner(q)) return false;
-    const auto ts = edge_tris(p, q);
+    const auto ts = m_.edge_faces(p, q);
     if (ts.size() != 2) return false;
-    std::vector<int> opp;
-    for (int t : ts)
-      for (int w : T_[t])
-        if (w != p && w != q) opp.push_back(w);
-    std::sort(opp.begin(), opp.end());
-    const auto np = neighbours(p), nq = neighbours(q);
-    std::vector<int> common;
-    std::set_intersection(np.begin(), np.end(), nq.begin(), nq.end(), std::back_inserter(common));
-    if (common != opp) return false;  // link condition
-    for (int t : ts) set_tri(t, kDead);
-    const std::vector<int> around = vt_[q];
-    for (int t : around) {
-      std::array<int, 3> f = T_[t];
-      for (int& w : f)
-        if (w == q) w = p;
-      set_tri(t, f);
-    }
+    const auto np = m_.neighbours(p), nq = m_.neighbours(q);
+    if (!m_.link_condition(q, p, ts, nq, np)) return false;
+    record(m_.collapse(q, p));
     return true;
   }
 
   // A new surface point on edge p-q (not a constraint), both triangles split in two.
   int split(int p, int q) {
     if (C_.count(edge_key(p, q))) return -1;
-    const auto ts = edge_tris(p, q);
-    if (ts.size() != 2) return -1;
+    if (m_.edge_face_count(p, q) != 2) return -1;
     const int m = add_vertex(0.5 * (S_.pos[p] + S_.pos[q]), S_.params[p].x());
     if (m < 0) return -1;
-    for (int t : ts) {
-      std::array<int, 3> f = T_[t];
-      int k = 0;
-      while (!((f[k] == p && f[(k + 1) % 3] == q) || (f[k] == q && f[(k + 1) % 3] == p))) ++k;
-      const int a = f[k], b = f[(k + 1) % 3], c = f[(k + 2) % 3];
-      set_tri(t, {a, m, c});
-      add_tri({m, b, c}, L_[t]);
-    }
+    record(m_.split(p, q, m));
     return m;
   }
 
@@ -431,12 +390,12 @@ class Repair {
   // tests of turned-over triangles project onto the surface, ~half of the pattern search's time.
   double vertex_min_above(int v, double floor) const {
     double m = 1e9;
-    for (int t : vt_[v]) {
+    for (int t : m_.vfaces[v]) {
       m = std::min(m, tri_min(t));
       if (m <= floor) return m;
     }
     int folded = !simple_star(v);
-    for (int t : vt_[v]) {
+    for (int t : m_.vfaces[v]) {
       if (m - M_PI * folded <= floor) break;
       folded += !faces_out(t);
     }
@@ -450,7 +409,7 @@ class Repair {
   // most of the repair's time. The two differ by step^2 x curvature, below the search's
   // resolution.
   void optimise(int v) {
-    if (!steiner(v) || vt_[v].empty()) return;
+    if (!steiner(v) || m_.vfaces[v].empty()) return;
     double cur = vertex_min(v);
     if (cur >= kSettledAngle) return;
     // The 15 candidates of a bad triangle optimise overlapping vertex sets, mostly around stars
@@ -513,9 +472,9 @@ class Repair {
     std::uint64_t h = vertex(0x1234567ull, v);
     h = mix(mix(mix(h, S_.normal[v].x()), S_.normal[v].y()), S_.normal[v].z());
     std::uint64_t star = 0;
-    for (int t : vt_[v]) {
+    for (int t : m_.vfaces[v]) {
       std::uint64_t ht = 0x51ED27ull;
-      for (int w : T_[t]) ht = vertex(ht, w);
+      for (int w : m_.tri[t]) ht = vertex(ht, w);
       star += ht;
     }
     return mix(h, static_cast<double>(star >> 11)) ^ star;
@@ -531,7 +490,7 @@ class Repair {
   // ascending list of triangle minimum angles capped at the goal (lexicographically larger is
   // better); empty if any triangle faces away from the surface.
   std::vector<int> region_of(int t) const {
-    std::vector<int> vs(T_[t].begin(), T_[t].end());
+    std::vector<int> vs(m_.tri[t].begin(), m_.tri[t].end());
     for (int ring = 0; ring < 2; ++ring) {
       std::vector<int> next = vs;
       for (int v : vs)
@@ -553,10 +512,10 @@ class Repair {
   Score score(const std::vector<int>& vs, double cap, const Score* bar = nullptr) const {
     std::vector<int> ts;
     for (int v : vs)
-      if (v < static_cast<int>(vt_.size()))
-        for (int t : vt_[v]) ts.push_back(t);
-    for (std::size_t v = journal_.n_verts; v < vt_.size(); ++v)
-      for (int t : vt_[v]) ts.push_back(t);
+      if (v < static_cast<int>(m_.vfaces.size()))
+        for (int t : m_.vfaces[v]) ts.push_back(t);
+    for (std::size_t v = journal_.n_verts; v < m_.vfaces.size(); ++v)
+      for (int t : m_.vfaces[v]) ts.push_back(t);
     std::sort(ts.begin(), ts.end());
     ts.erase(std::unique(ts.begin(), ts.end()), ts.end());
     Score sc;
@@ -564,9 +523,10 @@ class Repair {
     for (int t : ts) {
       if (!faces_out(t)) ++sc.folded;
       sc.s.push_back(std::min(cap, tri_min(t)));
-      if (T_[t][0] >= 0)
+      if (m_.face_alive[t])
         for (int k = 0; k < 3; ++k)
-          sc.longest = std::max(sc.longest, (S_.pos[T_[t][k]] - S_.pos[T_[t][(k + 1) % 3]]).norm());
+          sc.longest =
+              std::max(sc.longest, (S_.pos[m_.tri[t][k]] - S_.pos[m_.tri[t][(k + 1) % 3]]).norm());
     }
     std::sort(sc.s.begin(), sc.s.end());
     if (!scoring_deviation_) return sc;
@@ -616,8 +576,8 @@ class Repair {
       }
       case 1: {  // flip side i
         std::vector<int> quad;
-        for (int t : edge_tris(p, q))
-          for (int w : T_[t]) quad.push_back(w);
+        for (int t : m_.edge_faces(p, q))
+          for (int w : m_.tri[t]) quad.push_back(w);
         if (!flip(p, q)) return false;
         optimise_all(quad);
         return true;
@@ -635,21 +595,17 @@ class Repair {
         const int m = split(p, q);
         if (m < 0) return false;
         for (int pass = 0; pass < 2; ++pass)
-          for (int t : std::vector<int>(vt_[m])) {
-            if (T_[t][0] < 0) continue;
+          for (int t : std::vector<int>(m_.vfaces[m].begin(), m_.vfaces[m].end())) {
+            if (!m_.face_alive[t]) continue;
+            const auto& ft = m_.tri[t];
             int j = 0;
-            while (T_[t][j] != m) ++j;
-            const int a = T_[t][(j + 1) % 3], b = T_[t][(j + 2) % 3];
+            while (ft[j] != m) ++j;
+            const int a = ft[(j + 1) % 3], b = ft[(j + 2) % 3];
             const auto before = score({a, b, m}, 10);
-            const std::size_t mark = journal_.tris.size();
             if (!flip(a, b)) continue;
-            if (!better(score({a, b, m}, 10), before)) {
-              // undo just this flip
-              while (journal_.tris.size() > mark) {
-                const auto [tt, old] = journal_.tris.back();
-                journal_.tris.pop_back();
-                relink(tt, old);
-              }
+            if (!better(score({a, b, m}, 10), before)) {  // undo just this flip
+              undo(journal_.operations.back());
+              journal_.operations.pop_back();
             }
           }
         std::vector<int> vs = neighbours(m);
@@ -662,7 +618,7 @@ class Repair {
   }
 
   bool improve(int t, double goal, RepairStats& st) {
-    const std::array<int, 3> f = T_[t];
+    const std::array<int, 3> f = m_.tri[t];
     const std::vector<int> region = region_of(t);
     // Deviations are scored only in the repair of a triangle off the surface: sampling every
     // candidate's neighbourhood in the angle repairs too cost as much as the repair itself.
@@ -720,10 +676,10 @@ class Repair {
   const ScanSurface& surf_;
   const std::unordered_set<std::uint64_t>& C_;
   std::size_t fixed_;
-  std::vector<std::vector<int>> vt_;
   Journal journal_;
   std::unordered_set<std::uint64_t> stuck_states_;  // optimise: star states that gave no move
   double deviation_goal_;                           // mm; 0: no deviation goal
+  kernel::TriangleMesh m_;  // the triangles, their labels and adjacency (positions: S_)
   TriangleCells grid_;                              // triangles by 3D cell, for new_intersections
   GridSurfaceDistance grid_distance_{surf_};
   bool scoring_deviation_ = false;  // improve() works on a triangle beyond the deviation goal

@@ -4,6 +4,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
+#include <stdexcept>
 #include <string>
 
 #include "scanmesh/core/errors.h"
@@ -230,6 +231,27 @@ EdgeCollapse TriangleMesh::collapse(int v, int w) {
 void TriangleMesh::undo(const EdgeCollapse& collapsed) {
   for (int f : collapsed.moved) replace_corner(f, collapsed.w, collapsed.v);
   for (int f : collapsed.removed) revive_face(f);
+}
+
+void TriangleMesh::truncate(std::size_t faces, std::size_t vertices) {
+  for (std::size_t f = faces; f < tri.size(); ++f)
+    if (face_alive[f])
+      throw std::logic_error("TriangleMesh::truncate: face " + std::to_string(f) + " is live");
+  for (std::size_t v = vertices; v < vfaces.size(); ++v)
+    if (!vfaces[v].empty())
+      throw std::logic_error("TriangleMesh::truncate: vertex " + std::to_string(v) + " has faces");
+  for (std::size_t v = vertices; v < vfaces.size(); ++v) live_vertices_ -= vertex_alive[v] ? 1 : 0;
+  if (faces < tri.size()) {
+    tri.resize(faces);
+    label.resize(faces);
+    face_alive.resize(faces);
+  }
+  if (vertices < vfaces.size()) {
+    pos.resize(vertices);
+    vfaces.resize(vertices);
+    vertex_alive.resize(vertices);
+    valence_cache_.resize(std::min(valence_cache_.size(), vertices));
+  }
 }
 
 std::vector<int> TriangleMesh::compact() {

@@ -56,6 +56,10 @@ class SmallIndexList {
     n_ = 0;
     heap_.clear();
   }
+  void sort() {
+    int* d = n_ <= N ? inline_.data() : heap_.data();
+    std::sort(d, d + n_);
+  }
   std::size_t size() const { return n_; }
   bool empty() const { return n_ == 0; }
   int operator[](std::size_t i) const { return data()[i]; }
@@ -177,6 +181,16 @@ class TriangleMesh {
   //! faces and stays live until the caller, keeping the collapse, removes it (remove_vertex).
   EdgeCollapse collapse(int v, int w);
   void undo(const EdgeCollapse& collapsed);
+
+  //! Puts v's face list in increasing order. Undone operations restore the faces but not the
+  //! order of the lists; a caller that rolls trials back sorts the lists they touched, so that
+  //! what it does next does not depend on the trials.
+  void sort_faces(int v) { vfaces[v].sort(); }
+  //! Takes the arrays back to `faces` faces and `vertices` vertices, as they were before a
+  //! trial added more: every face from `faces` on must be dead and every vertex from
+  //! `vertices` on without faces (what undoing each operation of the trial leaves). A caller
+  //! that tries and rolls back many candidates keeps its indices from growing with them.
+  void truncate(std::size_t faces, std::size_t vertices);
 
   //! Drops dead vertices and faces from the arrays: the live ones keep their order and each
   //! vertex's face list is rebuilt in face order. Returns the old -> new vertex map (-1 for a
