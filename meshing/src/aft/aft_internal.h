@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "../kernel/cell_key.h"
 #include "scanmesh/meshing/aft/animesh.h"
 #include "scanmesh/meshing/edge_key.h"
 #include "scanmesh/reconstruction/scan_surface.h"
@@ -71,6 +72,17 @@ inline std::array<double, 3> corner_angles(std::span<const Eigen::Vector3d> P,
   return a;
 }
 
+//! The corner (0, 1 or 2) with the smallest of a triangle's angles, the first of equals.
+inline int smallest_corner(const std::array<double, 3>& angles) {
+  return static_cast<int>(std::min_element(angles.begin(), angles.end()) - angles.begin());
+}
+//! True if both edges of f at corner k are in `edges` (edge_key keys): the angle there lies
+//! between two constraint (line) edges, so the input fixes it.
+inline bool corner_between(const std::array<int, 3>& f, int k,
+                           const std::unordered_set<std::uint64_t>& edges) {
+  return edges.count(edge_key(f[k], f[(k + 1) % 3])) && edges.count(edge_key(f[k], f[(k + 2) % 3]));
+}
+
 //! The smallest angle of the triangle (a, b, c), in radians: the angle opposite the shortest
 //! side, so one atan2 instead of three (angle evaluations are a large share of the meshers' and
 //! the repair's work).
@@ -81,25 +93,21 @@ inline double min_angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
   return lb <= lc ? angle_at(b, c, a) : angle_at(c, a, b);
 }
 
+//! The place t in [0, 1] of the point of segment a-b closest to p (2D or 3D; 0 if a = b).
+template <typename Vector>
+double closest_segment_parameter(const Vector& p, const Vector& a, const Vector& b) {
+  const Vector ab = b - a;
+  return ab.squaredNorm() > 0 ? std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
+}
 //! Distance from p to the segment a-b (2D or 3D).
 template <typename Vector>
 double point_segment_distance(const Vector& p, const Vector& a, const Vector& b) {
-  const Vector ab = b - a;
-  const double t =
-      ab.squaredNorm() > 0 ? std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
-  return (a + t * ab - p).norm();
+  const double t = closest_segment_parameter(p, a, b);
+  return (a + t * (b - a) - p).norm();
 }
 
-//! The key of 3D grid cell (x, y, z): each coordinate's low 21 bits (two's complement).
-inline std::int64_t pack_cell(std::int64_t x, std::int64_t y, std::int64_t z) {
-  return ((x & 0x1fffff) << 42) | ((y & 0x1fffff) << 21) | (z & 0x1fffff);
-}
-//! The key of the grid cell (of side `cell`) that contains x.
-inline std::int64_t cell_key(const Eigen::Vector3d& x, double cell) {
-  return pack_cell(static_cast<std::int64_t>(std::floor(x.x() / cell)),
-                   static_cast<std::int64_t>(std::floor(x.y() / cell)),
-                   static_cast<std::int64_t>(std::floor(x.z() / cell)));
-}
+using kernel::cell_key;
+using kernel::pack_cell;
 
 //! The map from a tangent displacement at a surface point to the (phi, h) step that makes it,
 //! to first order: the pseudo-inverse of [dX/dphi, dX/dh]. Lifting param + M d lands on the

@@ -93,7 +93,7 @@ class WallCrossingGuard {
 class FlipPass {
  public:
   FlipPass(std::vector<std::array<int, 3>>& T, const std::vector<Vector3d>& P)
-      : T_(T), mesh_(P, T) {}
+      : T_(T), mesh_(P, T, "animation mesh flips") {}
   const kernel::TriangleMesh& mesh() const { return mesh_; }
   //! The quad of edge `key` if a flip may change it: not a constraint, two faces, and the
   //! other diagonal not an edge already.
@@ -993,13 +993,12 @@ AnimationMeshQuality evaluate_quality(const AnimationMesh& am, const ScanSurface
   for (std::size_t t = 0; t < T.size(); ++t) {
     const auto& f = T[t];
     const std::array<double, 3> ang = detail::corner_angles(P, f);
-    const int kmin = static_cast<int>(std::min_element(ang.begin(), ang.end()) - ang.begin());
+    const int kmin = detail::smallest_corner(ang);
     const double mn = ang[kmin] * 180 / M_PI,
                  mx = *std::max_element(ang.begin(), ang.end()) * 180 / M_PI;
     q.min_angle_deg = std::min(q.min_angle_deg, mn);
     q.max_angle_deg = std::max(q.max_angle_deg, mx);
-    const bool exempt = mn < 20 && line_edge.count(edge_key(f[kmin], f[(kmin + 1) % 3])) &&
-                        line_edge.count(edge_key(f[kmin], f[(kmin + 2) % 3]));
+    const bool exempt = mn < 20 && detail::corner_between(f, kmin, line_edge);
     if (exempt)
       ++q.small_angle_exempt;
     else

@@ -147,9 +147,7 @@ class Repair {
   // True if the smallest angle of t sits between two constraint edges: the input fixes it.
   bool forced(int t) const {
     const auto& f = m_.tri[t];
-    const std::array<double, 3> angles = corner_angles(S_.pos, f);
-    const int k = static_cast<int>(std::min_element(angles.begin(), angles.end()) - angles.begin());
-    return C_.count(edge_key(f[k], f[(k + 1) % 3])) && C_.count(edge_key(f[k], f[(k + 2) % 3]));
+    return corner_between(f, smallest_corner(corner_angles(S_.pos, f)), C_);
   }
 
   RepairStats run(double goal, double report, int rounds) {

@@ -289,9 +289,8 @@ Vector2d closest_on(const Vector2d& q, const Piece& pc, double W, double& t) {
   const double shift = W * std::round((q.x() - 0.5 * (a.x() + b.x())) / W);
   a.x() += shift;
   b.x() += shift;
-  const Vector2d d = b - a;
-  t = d.squaredNorm() > 0 ? std::clamp((q - a).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
-  return Vector2d(a + t * d);
+  t = detail::closest_segment_parameter(q, a, b);
+  return Vector2d(a + t * (b - a));
 }
 
 // 2. Snap open ends onto other lines.

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <unordered_map>
 
+#include "../kernel/cell_key.h"
 #include "../kernel/vertex_components.h"
 #include "hole_filling.h"
 #include "scanmesh/meshing/kernel/triangle_mesh.h"
@@ -340,24 +341,12 @@ std::size_t remove_necks(Surface& s, double max_width, double reach) {
   double length = 0;
   for (const auto& e : border) length += (s.pos[e[1]] - s.pos[e[0]]).norm();
   const double cell = std::max(max_width, length / (32.0 * static_cast<double>(border.size())));
-  auto cell_of = [&](const Vec3& p) {
-    return std::array<long long, 3>{static_cast<long long>(std::floor(p.x() / cell)),
-                                    static_cast<long long>(std::floor(p.y() / cell)),
-                                    static_cast<long long>(std::floor(p.z() / cell))};
-  };
-  // 21 bits per axis: cells 2^21 apart share a key, which only adds candidates.
-  auto key_of = [](long long x, long long y, long long z) {
-    constexpr std::uint64_t mask = (1u << 21) - 1;
-    return ((static_cast<std::uint64_t>(x) & mask) << 42) |
-           ((static_cast<std::uint64_t>(y) & mask) << 21) | (static_cast<std::uint64_t>(z) & mask);
-  };
-  std::unordered_map<std::uint64_t, std::vector<int>> grid;
+  std::unordered_map<std::int64_t, std::vector<int>> grid;
   for (int e = 0; e < static_cast<int>(border.size()); ++e) {
     const Vec3 &p = s.pos[border[e][0]], &q = s.pos[border[e][1]];
     const int steps = static_cast<int>(std::ceil((q - p).norm() / (0.5 * cell)));
     for (int k = 0; k <= steps; ++k) {
-      const auto c = cell_of(p + (steps ? double(k) / steps : 0.0) * (q - p));
-      auto& list = grid[key_of(c[0], c[1], c[2])];
+      auto& list = grid[kernel::cell_key(p + (steps ? double(k) / steps : 0.0) * (q - p), cell)];
       if (list.empty() || list.back() != e) list.push_back(e);
     }
   }
@@ -380,12 +369,12 @@ std::size_t remove_necks(Surface& s, double max_width, double reach) {
     // Faces lie left of the directed border: n x t points into the surface.
     const Vec3 inward = s.normal_at(c).cross(s.pos[next[c]] - s.pos[prev[c]]);
     const Vec3& p = s.pos[c];
-    const auto k = cell_of(p);
+    const auto k = kernel::cell_of(p, cell);
     bool neck = false;
-    for (long long x = k[0] - 2; x <= k[0] + 2 && !neck; ++x)
-      for (long long y = k[1] - 2; y <= k[1] + 2 && !neck; ++y)
-        for (long long z = k[2] - 2; z <= k[2] + 2 && !neck; ++z) {
-          const auto it = grid.find(key_of(x, y, z));
+    for (std::int64_t x = k[0] - 2; x <= k[0] + 2 && !neck; ++x)
+      for (std::int64_t y = k[1] - 2; y <= k[1] + 2 && !neck; ++y)
+        for (std::int64_t z = k[2] - 2; z <= k[2] + 2 && !neck; ++z) {
+          const auto it = grid.find(kernel::pack_cell(x, y, z));
           if (it == grid.end()) continue;
           for (int e : it->second) {
             const int a = border[e][0], b = border[e][1];
