@@ -189,15 +189,19 @@ class Repair {
     std::size_t n_tris = 0, n_verts = 0;
   };
 
-  // The triangles an operation left live with new corners.
+  // The triangles an operation changed, added or removed.
   static std::vector<int> changed_by(const Operation& op) {
     if (const auto* q = std::get_if<kernel::EdgeQuad>(&op)) return {q->f1, q->f2};
+    std::vector<int> ts;
     if (const auto* sp = std::get_if<kernel::EdgeSplit>(&op)) {
-      std::vector<int> ts = sp->changed;
+      ts = sp->changed;
       ts.insert(ts.end(), sp->added.begin(), sp->added.end());
-      return ts;
+    } else {
+      ts = std::get<kernel::EdgeCollapse>(op).moved;
+      const auto& removed = std::get<kernel::EdgeCollapse>(op).removed;
+      ts.insert(ts.end(), removed.begin(), removed.end());
     }
-    return std::get<kernel::EdgeCollapse>(op).moved;
+    return ts;
   }
   void undo(const Operation& op) {
     std::visit([&](const auto& o) { m_.undo(o); }, op);
@@ -256,10 +260,7 @@ class Repair {
   void rollback() {
     std::vector<int> touched;  // corners of the triangles the operations changed or removed
     for (auto it = journal_.operations.rbegin(); it != journal_.operations.rend(); ++it) {
-      std::vector<int> ts = changed_by(*it);
-      if (const auto* c = std::get_if<kernel::EdgeCollapse>(&*it))
-        ts.insert(ts.end(), c->removed.begin(), c->removed.end());
-      for (int t : ts)
+      for (int t : changed_by(*it))
         for (int v : m_.tri[t]) touched.push_back(v);
       undo(*it);
     }
