@@ -14,7 +14,7 @@
 #include <utility>
 #include <vector>
 
-#include "../kernel/cell_key.h"
+#include "../kernel/cell_lists.h"
 #include "scanmesh/meshing/aft/animesh.h"
 #include "scanmesh/meshing/edge_key.h"
 #include "scanmesh/reconstruction/scan_surface.h"
@@ -119,76 +119,7 @@ inline Eigen::Matrix<double, 2, 3> tangent_to_parameters(const SurfacePoint& at)
   return (jac.transpose() * jac).inverse() * jac.transpose();
 }
 
-//! Lists of indices by cell key (keys >= 0): open addressing with linear probing in a
-//! power-of-two table. The advancing front looks up ~65 cells around every front edge, most of
-//! them empty; with std::unordered_map (a modulo by a prime and a node per entry) these
-//! look-ups were ~8 % of the mesher's time at a quarter of the sample units. Entries are
-//! removed only all at once (clear(), which keeps the memory for the next round).
-class CellLists {
- public:
-  CellLists() : keys_(64, kEmpty), slot_(64, -1) {}
-  //! The list of `key`, created empty if absent.
-  std::vector<int>& operator[](std::int64_t key) {
-    std::size_t i = home(key);
-    for (; keys_[i] != kEmpty; i = (i + 1) & mask())
-      if (keys_[i] == key) return lists_[slot_[i]];
-    if (2 * (used_ + 1) > keys_.size()) {
-      grow();
-      return (*this)[key];
-    }
-    keys_[i] = key;
-    slot_[i] = static_cast<int>(used_);
-    if (used_ == lists_.size()) lists_.emplace_back();
-    return lists_[used_++];
-  }
-  //! The list of `key`, or nullptr.
-  std::vector<int>* find(std::int64_t key) {
-    return const_cast<std::vector<int>*>(std::as_const(*this).find(key));
-  }
-  const std::vector<int>* find(std::int64_t key) const {
-    for (std::size_t i = home(key); keys_[i] != kEmpty; i = (i + 1) & mask())
-      if (keys_[i] == key) return &lists_[slot_[i]];
-    return nullptr;
-  }
-  //! Every list in the order of creation (a list may be empty).
-  std::span<const std::vector<int>> lists() const { return {lists_.data(), used_}; }
-  //! Removes every key; the lists' memory is reused.
-  void clear() {
-    std::fill(keys_.begin(), keys_.end(), kEmpty);
-    for (std::size_t k = 0; k < used_; ++k) lists_[k].clear();
-    used_ = 0;
-  }
-
- private:
-  static constexpr std::int64_t kEmpty = -1;
-  std::size_t mask() const { return keys_.size() - 1; }
-  // Fibonacci hashing: the top bits of the product depend on every bit of the key. (Bits from
-  // 32 up, masked, ignored the x coordinate packed at bit 42 in tables under 1024 slots: cells
-  // differing only in x collided, and probe runs were most of the front search's time.)
-  std::size_t home(std::int64_t key) const {
-    return static_cast<std::size_t>((static_cast<std::uint64_t>(key) * 0x9E3779B97F4A7C15ull) >>
-                                    shift_);
-  }
-  void grow() {
-    std::vector<std::int64_t> keys(2 * keys_.size(), kEmpty);
-    std::vector<int> slot(keys.size(), -1);
-    --shift_;
-    keys_.swap(keys);
-    slot_.swap(slot);
-    for (std::size_t j = 0; j < keys.size(); ++j) {
-      if (keys[j] == kEmpty) continue;
-      std::size_t i = home(keys[j]);
-      while (keys_[i] != kEmpty) i = (i + 1) & mask();
-      keys_[i] = keys[j];
-      slot_[i] = slot[j];
-    }
-  }
-  std::vector<std::int64_t> keys_;
-  std::vector<int> slot_;  // index into lists_
-  int shift_ = 64 - 6;     // 64 - log2(keys_.size())
-  std::vector<std::vector<int>> lists_;
-  std::size_t used_ = 0;  // lists_[0, used_) are in use
-};
+using kernel::CellLists;
 
 //! Triangles filed under the cells of a uniform 3D grid that their bounding boxes overlap, for
 //! local 3D crossing tests while a mesh changes (the post-processing's moves and flips, the

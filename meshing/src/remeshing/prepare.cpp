@@ -9,7 +9,7 @@
 #include <cstdint>
 #include <unordered_map>
 
-#include "../kernel/cell_key.h"
+#include "../kernel/cell_lists.h"
 #include "../kernel/vertex_components.h"
 #include "hole_filling.h"
 #include "scanmesh/meshing/kernel/triangle_mesh.h"
@@ -341,7 +341,7 @@ std::size_t remove_necks(Surface& s, double max_width, double reach) {
   double length = 0;
   for (const auto& e : border) length += (s.pos[e[1]] - s.pos[e[0]]).norm();
   const double cell = std::max(max_width, length / (32.0 * static_cast<double>(border.size())));
-  std::unordered_map<std::int64_t, std::vector<int>> grid;
+  kernel::CellLists grid;
   for (int e = 0; e < static_cast<int>(border.size()); ++e) {
     const Vec3 &p = s.pos[border[e][0]], &q = s.pos[border[e][1]];
     const int steps = static_cast<int>(std::ceil((q - p).norm() / (0.5 * cell)));
@@ -374,9 +374,9 @@ std::size_t remove_necks(Surface& s, double max_width, double reach) {
     for (std::int64_t x = k[0] - 2; x <= k[0] + 2 && !neck; ++x)
       for (std::int64_t y = k[1] - 2; y <= k[1] + 2 && !neck; ++y)
         for (std::int64_t z = k[2] - 2; z <= k[2] + 2 && !neck; ++z) {
-          const auto it = grid.find(kernel::pack_cell(x, y, z));
-          if (it == grid.end()) continue;
-          for (int e : it->second) {
+          const std::vector<int>* list = grid.find(kernel::pack_cell(x, y, z));
+          if (!list) continue;
+          for (int e : *list) {
             const int a = border[e][0], b = border[e][1];
             if (a == c || b == c) continue;
             const Vec3 ab = s.pos[b] - s.pos[a];
