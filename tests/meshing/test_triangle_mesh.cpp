@@ -86,6 +86,14 @@ TEST(KernelTriangleMesh, QuadIsOrientedFromVToW) {
   EXPECT_EQ(q->f2, 1);
   EXPECT_EQ(q->b, 3);
   EXPECT_FALSE(m.quad(0, 1));  // a border edge has no quad
+  EXPECT_TRUE(m.traverses(0, 2, 0));
+  EXPECT_FALSE(m.traverses(0, 0, 2));
+  EXPECT_TRUE(m.oriented_quad(2, 0));
+  // The second face turned over: both still hold 0-2, but not as one oriented surface.
+  const std::vector<std::array<int, 3>> turned{{0, 1, 2}, {0, 3, 2}};
+  const TriangleMesh t({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}, turned);
+  EXPECT_TRUE(t.quad(2, 0));
+  EXPECT_FALSE(t.oriented_quad(2, 0));
 }
 
 TEST(KernelTriangleMesh, FlipTurnsTheDiagonalAndUndoRestoresIt) {

@@ -349,11 +349,9 @@ class Repair {
   // Edge p-q of two triangles (p, q, r) and (q, p, s) of one region becomes r-s.
   bool flip(int p, int q) {
     if (C_.count(edge_key(p, q))) return false;
-    const auto quad = m_.quad(p, q);
-    if (!quad || m_.label[quad->f1] != m_.label[quad->f2]) return false;
-    const auto& f2 = m_.tri[quad->f2];
-    const int k = f2[0] == q ? 0 : (f2[1] == q ? 1 : 2);
-    if (f2[(k + 1) % 3] != p || has_edge(quad->a, quad->b)) return false;
+    const auto quad = m_.oriented_quad(p, q);
+    if (!quad || m_.label[quad->f1] != m_.label[quad->f2] || has_edge(quad->a, quad->b))
+      return false;
     m_.flip(*quad);
     record(*quad);
     return true;

@@ -159,12 +159,16 @@ std::optional<EdgeQuad> TriangleMesh::quad(int v, int w) const {
   const auto ef = edge_faces(v, w);
   if (ef.size() != 2) return std::nullopt;
   int f1 = ef[0], f2 = ef[1];
-  const auto& t = tri[f1];
-  const int i = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
-  if (t[(i + 1) % 3] != w) std::swap(f1, f2);
+  if (!traverses(f1, v, w)) std::swap(f1, f2);
   const int a = opposite(f1, v, w), b = opposite(f2, v, w);
   if (a == b) return std::nullopt;
   return EdgeQuad{f1, f2, v, w, a, b};
+}
+
+std::optional<EdgeQuad> TriangleMesh::oriented_quad(int v, int w) const {
+  const auto q = quad(v, w);
+  if (!q || !traverses(q->f1, v, w) || !traverses(q->f2, w, v)) return std::nullopt;
+  return q;
 }
 
 std::optional<EdgeQuad> TriangleMesh::flip(int v, int w) {

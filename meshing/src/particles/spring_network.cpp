@@ -94,13 +94,6 @@ struct SpringNetwork::Impl {
   // Faces containing both a and b (a vector: the rules reorder them).
   std::vector<int> edge_faces(int a, int b) const { return mesh.edge_faces(a, b); }
   int opposite(int f, int a, int b) const { return mesh.opposite(f, a, b); }
-  // True if the face traverses a -> b.
-  bool has_directed(int f, int a, int b) const {
-    const auto& t = mesh.tri[f];
-    for (int k = 0; k < 3; ++k)
-      if (t[k] == a && t[(k + 1) % 3] == b) return true;
-    return false;
-  }
   // Sorted: the rules visit neighbours in index order.
   std::vector<int> neighbors(int a) const {
     std::vector<int> r = mesh.neighbours(a);
@@ -257,11 +250,9 @@ struct SpringNetwork::Impl {
   // ---- Rule 2: 2 -> 4 split at the midpoint ---------------------------------------------
   static constexpr int kMaxSplitValence = 12;
   bool try_split(int a, int b, const ImplicitSurface& surface) {
-    auto ef = edge_faces(a, b);
-    if (ef.size() != 2) return false;  // Gap: border edges are not split (scan mode)
-    if (!has_directed(ef[0], a, b)) std::swap(ef[0], ef[1]);
-    if (!has_directed(ef[0], a, b) || !has_directed(ef[1], b, a)) return false;
-    const int c = opposite(ef[0], a, b), d = opposite(ef[1], a, b);
+    const auto quad = mesh.oriented_quad(a, b);
+    if (!quad) return false;  // Gap: border edges are not split (scan mode)
+    const int c = quad->a, d = quad->b;
     // Decision 42: in relax() (static surfaces, scan mode; §4.4 off) a split adds a spring at c
     // and at d only up to kMaxSplitValence springs. The time step is 1 / (rho x largest
     // valence), so one particle whose fan kept growing slowed the whole network down (the
@@ -276,8 +267,8 @@ struct SpringNetwork::Impl {
     if (const auto q = project_to_surface(surface, mid, 3);
         q && (*q - mid).norm() < 0.5 * length(a, b))
       mid = *q;
-    kill_face(ef[0]);
-    kill_face(ef[1]);
+    kill_face(quad->f1);
+    kill_face(quad->f2);
     const int m = add_vertex(mid);
     particles[m].f = particles[a].f;
     particles[m].defined = false;
@@ -299,12 +290,9 @@ struct SpringNetwork::Impl {
   // mesh, whose neighbouring faces may meet at more than 60 degrees).
   enum FlipMode { kValence, kGlide, kDelaunay };
   bool try_flip(int a, int b, FlipMode mode = kValence) {
-    auto ef = edge_faces(a, b);
-    if (ef.size() != 2) return false;
-    if (!has_directed(ef[0], a, b)) std::swap(ef[0], ef[1]);
-    if (!has_directed(ef[0], a, b) || !has_directed(ef[1], b, a)) return false;
-    const int c = opposite(ef[0], a, b), d = opposite(ef[1], a, b);
-    if (c == d || springs.count(edge_key(c, d))) return false;
+    const auto quad = mesh.oriented_quad(a, b);
+    if (!quad || springs.count(edge_key(quad->a, quad->b))) return false;
+    const int c = quad->a, d = quad->b;
     auto target = [&](int v) { return particles[v].boundary ? 4 : 6; };
     const int va = fast_valence(a), vb = fast_valence(b), vc = fast_valence(c),
               vd = fast_valence(d);
@@ -318,7 +306,7 @@ struct SpringNetwork::Impl {
     const std::array<int, 3> t0{a, d, c}, t1{b, c, d};
     const Vector3d n0 = face_normal(t0), n1 = face_normal(t1);
     const Vector3d old_n =
-        face_normal(mesh.tri[ef[0]]).normalized() + face_normal(mesh.tri[ef[1]]).normalized();
+        face_normal(mesh.tri[quad->f1]).normalized() + face_normal(mesh.tri[quad->f2]).normalized();
     if (mode != kDelaunay && n0.dot(n1) < 0.5 * n0.norm() * n1.norm()) return false;  // crease
     if (n0.dot(old_n) <= 0.0 || n1.dot(old_n) <= 0.0) return false;
     const double min_new =
@@ -328,9 +316,9 @@ struct SpringNetwork::Impl {
     if (min_new < std::min(min_old, 10.0 * std::numbers::pi / 180.0)) return false;
     const double rest =
         0.25 * (spring(a, c).rest + spring(b, c).rest + spring(a, d).rest + spring(b, d).rest);
-    mesh.flip(kernel::EdgeQuad{ef[0], ef[1], a, b, c, d});  // (a, b, c), (b, a, d) as tested
-    mesh.put_first(ef[0], a);  // t0, started where the network's flips always started it
-    mesh.put_first(ef[1], b);  // t1 (put_first says why)
+    mesh.flip(*quad);             // (a, b, c), (b, a, d) as tested
+    mesh.put_first(quad->f1, a);  // t0, started where the network's flips always started it
+    mesh.put_first(quad->f2, b);  // t1 (put_first says why)
     springs.erase(edge_key(a, b));
     keys_valid_ = false;
     springs[edge_key(c, d)] = make_spring(c, d, rest);
@@ -1175,7 +1163,7 @@ struct SpringNetwork::Impl {
         if (ef.size() != 2) return false;
         const int other = ef[0] == f ? ef[1] : ef[0];
         if (in_ring.count(other)) return false;
-        border.push_back(has_directed(other, u, v) ? Border{u, v} : Border{v, u});
+        border.push_back(mesh.traverses(other, u, v) ? Border{u, v} : Border{v, u});
       }
     }
     // Group the border edges into loops: exactly two, each simple with >= 3 edges.

@@ -144,6 +144,11 @@ class TriangleMesh {
   std::vector<std::uint64_t> edges() const;
   //! The corner of f that is neither v nor w.
   int opposite(int f, int v, int w) const;
+  //! True if face f runs from v to w (w follows v in its corner order).
+  bool traverses(int f, int v, int w) const {
+    const auto& t = tri[f];
+    return (t[0] == v && t[1] == w) || (t[1] == v && t[2] == w) || (t[2] == v && t[0] == w);
+  }
   Eigen::Vector3d face_normal(int f) const;  //!< unit (zero for degenerate faces)
   double face_area(int f) const;
 
@@ -155,6 +160,9 @@ class TriangleMesh {
   //! The quad of v-w, oriented from v to w; nullopt unless v-w has exactly two faces with
   //! different opposite corners.
   std::optional<EdgeQuad> quad(int v, int w) const;
+  //! The quad of v-w when its faces are oriented alike (f1 runs v -> w and f2 w -> v), as on a
+  //! consistently oriented surface; nullopt otherwise.
+  std::optional<EdgeQuad> oriented_quad(int v, int w) const;
   //! Turns v-w into the quad's other diagonal a-b: f1 becomes (v, b, a) and f2 (w, a, b), each
   //! keeping the slots of the corners it keeps. nullopt, and nothing changed, when v-w has no
   //! quad or a-b is an edge already (a flip would duplicate it).
