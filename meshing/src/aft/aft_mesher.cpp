@@ -434,11 +434,10 @@ class Mesher {
     // The cells that the box f.M +- reach overlaps: an edge of the search has its midpoint
     // within `reach` of f.M. (3-4 cells per axis; the cube of +-ceil(reach / cell_) cells
     // around f.M's cell, 5 per axis, looked up twice as many, nearly all of them empty.)
-    std::array<std::int64_t, 3> lo, count;
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = static_cast<std::int64_t>(std::floor((f.M[k] - reach) / cell_));
-      count[k] = static_cast<std::int64_t>(std::floor((f.M[k] + reach) / cell_)) - lo[k] + 1;
-    }
+    const std::array<std::int64_t, 3> lo = kernel::cell_of(f.M - Vector3d::Constant(reach), cell_),
+                                      hi = kernel::cell_of(f.M + Vector3d::Constant(reach), cell_);
+    std::array<std::int64_t, 3> count;
+    for (int k = 0; k < 3; ++k) count[k] = hi[k] - lo[k] + 1;
     seen_.lo = lo;
     seen_.count = count;
     for (std::int64_t dx = 0; dx < count[0]; ++dx)
@@ -676,12 +675,10 @@ class Mesher {
     std::swap(f.seen, seen_);
   }
   bool side_in(const Seen& s, int a, int b) {
-    const Vector3d mid = 0.5 * (N_.pos[a] + N_.pos[b]);
+    // The cell of the edge's midpoint, as cell_key files the edge.
+    const auto c = kernel::cell_of(0.5 * (N_.pos[a] + N_.pos[b]), cell_);
     bool in_box = true;
-    for (int k = 0; k < 3; ++k) {
-      const auto c = static_cast<std::int64_t>(std::floor(mid[k] / cell_));
-      in_box = in_box && c >= s.lo[k] && c < s.lo[k] + s.count[k];
-    }
+    for (int k = 0; k < 3; ++k) in_box = in_box && c[k] >= s.lo[k] && c[k] < s.lo[k] + s.count[k];
     if (in_box) return true;
     std::vector<int>& cols = side_cols_;
     long j0 = 0, j1 = 0;

@@ -208,8 +208,8 @@ class Repair {
   }
   // Records an operation the mesh just made and files its changed triangles in grid_.
   void record(Operation op) {
-    for (int t : changed_by(op)) insert(t);
-    journal_.operations.push_back(std::move(op));
+    journal_.operations.push_back(std::move(op));  // first: undone by rollback() come what may
+    for (int t : changed_by(journal_.operations.back())) insert(t);
   }
 
   // The triangles by 3D cell (grid_), for the intersection test of changed ones; a candidate's
@@ -272,7 +272,8 @@ class Repair {
     S_.pos.resize(journal_.n_verts);
     S_.normal.resize(journal_.n_verts);
     // The undone operations restore the triangles but not the order of their corners' lists:
-    // sorted, so that the outcome does not depend on the history of rejected candidates.
+    // sorted, those lists do not keep whatever order the refused operations left (a list that
+    // a kept operation had appended to comes back sorted all the same).
     for (int v : touched)
       if (v < static_cast<int>(m_.vfaces.size())) m_.sort_faces(v);
     journal_ = Journal{};
@@ -360,8 +361,10 @@ class Repair {
   // Steiner point q merges into p (p keeps its place).
   bool collapse(int q, int p) {
     if (!steiner(q)) return false;
-    const auto ts = m_.edge_faces(p, q);
-    if (ts.size() != 2) return false;
+    // Two faces with different third corners (quad); a doubled face pair is not collapsed.
+    const auto quad = m_.quad(p, q);
+    if (!quad) return false;
+    const std::array<int, 2> ts{quad->f1, quad->f2};
     const auto np = m_.neighbours(p), nq = m_.neighbours(q);
     if (!m_.link_condition(q, p, ts, nq, np)) return false;
     record(m_.collapse(q, p));
@@ -676,7 +679,9 @@ class Repair {
   Journal journal_;
   std::unordered_set<std::uint64_t> stuck_states_;  // optimise: star states that gave no move
   double deviation_goal_;                           // mm; 0: no deviation goal
-  kernel::TriangleMesh m_;  // the triangles, their labels and adjacency (positions: S_)
+  // The triangles, their labels and adjacency. Positions live in S_: m_.pos is the start's
+  // copy, never updated, so m_'s geometric queries (face_normal, to_mesh) are not used here.
+  kernel::TriangleMesh m_;
   TriangleCells grid_;                              // triangles by 3D cell, for new_intersections
   GridSurfaceDistance grid_distance_{surf_};
   bool scoring_deviation_ = false;  // improve() works on a triangle beyond the deviation goal

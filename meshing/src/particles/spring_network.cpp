@@ -251,7 +251,8 @@ struct SpringNetwork::Impl {
   static constexpr int kMaxSplitValence = 12;
   bool try_split(int a, int b, const ImplicitSurface& surface) {
     const auto quad = mesh.oriented_quad(a, b);
-    if (!quad) return false;  // Gap: border edges are not split (scan mode)
+    // Gap: border edges are not split (scan mode), nor an edge whose faces are a doubled pair.
+    if (!quad) return false;
     const int c = quad->a, d = quad->b;
     // Decision 42: in relax() (static surfaces, scan mode; §4.4 off) a split adds a spring at c
     // and at d only up to kMaxSplitValence springs. The time step is 1 / (rho x largest
