@@ -815,20 +815,15 @@ struct SpringNetwork::Impl {
   // 4/3 R_e, collapse those shorter than 4/5 R_e, flip towards valence 6, relax tangentially.
   int remesh_round(const ImplicitSurface& surface) {
     int changes = 0;
-    std::vector<std::uint64_t> keys;
-    auto sorted_keys = [&] {
-      keys.clear();
-      for (const auto& [k, s] : springs) keys.push_back(k);
-      std::sort(keys.begin(), keys.end());
-    };
-    sorted_keys();
+    // Each pass over a copy of the keys as they were before it (its operations change them).
+    std::vector<std::uint64_t> keys = sorted_keys();
     for (std::uint64_t k : keys) {
       const auto it = springs.find(k);
       if (it == springs.end() || it->second.topo || it->second.special) continue;
       const int a = edge_key_first(k), b = edge_key_second(k);
       if (length(a, b) > 4.0 / 3.0 * it->second.rest && try_split(a, b, surface)) ++changes;
     }
-    sorted_keys();
+    keys = sorted_keys();
     for (std::uint64_t k : keys) {
       const auto it = springs.find(k);
       if (it == springs.end() || it->second.topo || it->second.special) continue;
@@ -838,7 +833,7 @@ struct SpringNetwork::Impl {
           try_collapse(a, b))
         ++changes;
     }
-    sorted_keys();
+    keys = sorted_keys();
     for (std::uint64_t k : keys) {
       const auto it = springs.find(k);
       if (it == springs.end() || it->second.topo) continue;
@@ -1691,6 +1686,17 @@ bool SpringNetwork::converged() const { return impl_->converged; }
 
 namespace {
 
+// The options of a coarse level, which is subdivided and relaxed again: it need not settle as
+// tightly, and the progress display follows the final level.
+ParticleOptions coarse_level(const ParticleOptions& options, double edge_length) {
+  ParticleOptions coarse = options;
+  coarse.edge_length = edge_length;
+  coarse.max_iterations = std::min(options.max_iterations, 600);
+  coarse.convergence_tolerance = std::max(options.convergence_tolerance, 1e-2);
+  coarse.progress = nullptr;
+  return coarse;
+}
+
 // 1:4 subdivision; the edge midpoints are Newton-projected onto the surface. Every new
 // vertex has valence 6, so the valence defects of the coarse mesh are all the fine mesh has.
 Mesh subdivide(const Mesh& m, const ImplicitSurface& surface) {
@@ -1760,13 +1766,8 @@ SpringNetwork layered_network(const ImplicitSurface& surface, const ParticleOpti
     }
   int total = 0;
   for (; level > 0; --level) {
-    ParticleOptions coarse = options;
-    coarse.edge_length = R * (1 << level);
+    ParticleOptions coarse = coarse_level(options, R * (1 << level));
     coarse.adaptive = false;
-    coarse.max_iterations = std::min(options.max_iterations, 600);
-    // A coarse level is subdivided and relaxed again: it need not settle as tightly.
-    coarse.convergence_tolerance = std::max(options.convergence_tolerance, 1e-2);
-    coarse.progress = nullptr;  // quick; the display follows the final level
     SpringNetwork net(start, coarse);
     total += net.relax(surface);
     const Mesh relaxed = net.mesh();
@@ -1924,12 +1925,7 @@ std::vector<CoarseCandidate> coarse_candidates(const ImplicitSurface& surface,
       source_stats.components != fine_stats.components)
     source = fine;
   {
-    ParticleOptions half = options;
-    half.edge_length = 2.0 * R;
-    half.max_iterations = std::min(options.max_iterations, 600);
-    half.convergence_tolerance = std::max(options.convergence_tolerance, 1e-2);
-    half.progress = nullptr;
-    SpringNetwork seed(source, half);
+    SpringNetwork seed(source, coarse_level(options, 2.0 * R));
     *iterations += seed.relax(surface);
     if (!same_topology(seed, fine_stats)) return out;
     source = seed.mesh();
@@ -1944,12 +1940,9 @@ std::vector<CoarseCandidate> coarse_candidates(const ImplicitSurface& surface,
     if (coarse_count > options.max_spread_particles * components) continue;
     for (const double count : {std::floor(coarse_count), std::ceil(coarse_count)}) {
       if (count < per_component) continue;
-      ParticleOptions coarse = options;
-      coarse.edge_length = R * n * std::sqrt((wanted - chi) / (n * n * (count - chi)));
-      coarse.max_iterations = std::min(options.max_iterations, 600);
-      coarse.convergence_tolerance = std::max(options.convergence_tolerance, 1e-2);
-      coarse.progress = nullptr;  // quick; the display follows the final level
-      SpringNetwork net(source, coarse);
+      SpringNetwork net(
+          source,
+          coarse_level(options, R * n * std::sqrt((wanted - chi) / (n * n * (count - chi)))));
       *iterations += net.relax(surface, static_cast<std::size_t>(count));
       net.spread_evenly(surface, 200);
       *iterations += net.relax(surface, static_cast<std::size_t>(count));

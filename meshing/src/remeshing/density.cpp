@@ -18,20 +18,9 @@ using Vec3 = Eigen::Vector3d;
 struct Adjacency {
   std::vector<int> first, nbr;
   explicit Adjacency(const TriangleMesh& m) : first(m.pos.size() + 1, 0) {
-    const int n = static_cast<int>(m.pos.size());
-    std::vector<std::vector<int>> lists(n);
-    for (std::size_t f = 0; f < m.tri.size(); ++f) {
-      if (!m.face_alive[f]) continue;
-      const auto& t = m.tri[f];
-      for (int i = 0; i < 3; ++i) {
-        lists[t[i]].push_back(t[(i + 1) % 3]);
-        lists[t[i]].push_back(t[(i + 2) % 3]);
-      }
-    }
-    for (int v = 0; v < n; ++v) {
-      auto& l = lists[v];
+    for (std::size_t v = 0; v < m.pos.size(); ++v) {
+      std::vector<int> l = m.neighbours(static_cast<int>(v));
       std::sort(l.begin(), l.end());
-      l.erase(std::unique(l.begin(), l.end()), l.end());
       first[v + 1] = first[v] + static_cast<int>(l.size());
       nbr.insert(nbr.end(), l.begin(), l.end());
     }
@@ -132,20 +121,17 @@ std::vector<double> kappa_on_rings(const TriangleMesh& m, const std::vector<char
     // 2-ring.
     ring.clear();
     mark[v] = v;
-    for (int f : m.vfaces[v])
-      for (int c : m.tri[f])
-        if (mark[c] != v) {
-          mark[c] = v;
-          ring.push_back(c);
-        }
-    const std::size_t first = ring.size();
-    for (std::size_t i = 0; i < first; ++i)
-      for (int f : m.vfaces[ring[i]])
+    auto add_ring = [&](int x) {  // the corners of x's faces not met yet
+      for (int f : m.vfaces[x])
         for (int c : m.tri[f])
           if (mark[c] != v) {
             mark[c] = v;
             ring.push_back(c);
           }
+    };
+    add_ring(v);
+    const std::size_t first = ring.size();
+    for (std::size_t i = 0; i < first; ++i) add_ring(ring[i]);
     if (ring.size() < 5) continue;
     const Eigen::Vector3d nz = normal[v].normalized();
     Eigen::Vector3d ax =
