@@ -189,19 +189,21 @@ class Repair {
     std::size_t n_tris = 0, n_verts = 0;
   };
 
-  // The triangles an operation changed, added or removed.
-  static std::vector<int> changed_by(const Operation& op) {
-    if (const auto* q = std::get_if<kernel::EdgeQuad>(&op)) return {q->f1, q->f2};
-    std::vector<int> ts;
-    if (const auto* sp = std::get_if<kernel::EdgeSplit>(&op)) {
-      ts = sp->changed;
-      ts.insert(ts.end(), sp->added.begin(), sp->added.end());
+  // Calls visit(t) for each triangle an operation changed, added or removed (no list built:
+  // the candidates' scores ask for them thousands of times).
+  template <class Visit>
+  static void for_each_triangle(const Operation& op, Visit&& visit) {
+    if (const auto* q = std::get_if<kernel::EdgeQuad>(&op)) {
+      visit(q->f1);
+      visit(q->f2);
+    } else if (const auto* sp = std::get_if<kernel::EdgeSplit>(&op)) {
+      for (int t : sp->changed) visit(t);
+      for (int t : sp->added) visit(t);
     } else {
-      ts = std::get<kernel::EdgeCollapse>(op).moved;
-      const auto& removed = std::get<kernel::EdgeCollapse>(op).removed;
-      ts.insert(ts.end(), removed.begin(), removed.end());
+      const auto& c = std::get<kernel::EdgeCollapse>(op);
+      for (int t : c.moved) visit(t);
+      for (int t : c.removed) visit(t);
     }
-    return ts;
   }
   void undo(const Operation& op) {
     std::visit([&](const auto& o) { m_.undo(o); }, op);
@@ -209,7 +211,7 @@ class Repair {
   // Records an operation the mesh just made and files its changed triangles in grid_.
   void record(Operation op) {
     journal_.operations.push_back(std::move(op));  // first: undone by rollback() come what may
-    for (int t : changed_by(journal_.operations.back())) insert(t);
+    for_each_triangle(journal_.operations.back(), [&](int t) { insert(t); });
   }
 
   // The triangles by 3D cell (grid_), for the intersection test of changed ones; a candidate's
@@ -221,8 +223,9 @@ class Repair {
   int new_intersections() const {
     std::vector<int> changed;
     for (const Operation& op : journal_.operations)
-      for (int t : changed_by(op))
+      for_each_triangle(op, [&](int t) {
         if (m_.face_alive[t]) changed.push_back(t);
+      });
     for (const auto& m : journal_.moved)
       for (int t : m_.vfaces[m.v]) changed.push_back(t);
     std::sort(changed.begin(), changed.end());
@@ -260,8 +263,8 @@ class Repair {
   void rollback() {
     std::vector<int> touched;  // corners of the triangles the operations changed or removed
     for (auto it = journal_.operations.rbegin(); it != journal_.operations.rend(); ++it) {
-      for (int t : changed_by(*it))
-        for (int v : m_.tri[t]) touched.push_back(v);
+      for_each_triangle(
+          *it, [&](int t) { touched.insert(touched.end(), m_.tri[t].begin(), m_.tri[t].end()); });
       undo(*it);
     }
     for (auto it = journal_.moved.rbegin(); it != journal_.moved.rend(); ++it)

@@ -1730,12 +1730,23 @@ double particles_for_area(double area, double edge, long long chi) {
   return area / (std::sqrt(3.0) / 2.0 * edge * edge) + static_cast<double>(chi);
 }
 
-bool same_topology(const SpringNetwork& net, const TopologyStats& reference) {
-  const Mesh m = net.mesh();
-  const TopologyStats s = topology_stats(m);
-  return net.converged() && s.boundary_edges == 0 && s.nonmanifold_edges == 0 &&
+// Closed like the reference: no border or non-manifold edge, the same Euler characteristic
+// and as many components.
+bool closed_like(const TopologyStats& s, const TopologyStats& reference) {
+  return s.boundary_edges == 0 && s.nonmanifold_edges == 0 &&
          s.euler_characteristic == reference.euler_characteristic &&
          s.components == reference.components;
+}
+
+bool same_topology(const SpringNetwork& net, const TopologyStats& reference) {
+  return net.converged() && closed_like(topology_stats(net.mesh()), reference);
+}
+
+// Every edge length of a closed mesh (each edge twice, once per face).
+template <class F>
+void for_each_edge_length(const Mesh& m, F&& f) {
+  for (const auto& t : m.triangles)
+    for (int k = 0; k < 3; ++k) f((m.positions[t[k]] - m.positions[t[(k + 1) % 3]]).norm());
 }
 
 // The layered start: marching tetrahedra at 2^k R relaxed and subdivided 1:4 level by level.
@@ -1754,10 +1765,7 @@ SpringNetwork layered_network(const ImplicitSurface& surface, const ParticleOpti
     for (int k = options.max_levels; k >= 1; --k) {
       const Mesh coarse = marching_tetrahedra(surface, options.start_spacing * R * (1 << k));
       if (coarse.triangles.empty()) continue;
-      const TopologyStats cs = topology_stats(coarse);
-      if (cs.boundary_edges != 0 || cs.nonmanifold_edges != 0 ||
-          cs.euler_characteristic != fine_stats.euler_characteristic ||
-          cs.components != fine_stats.components ||
+      if (!closed_like(topology_stats(coarse), fine_stats) ||
           coarse.vertex_count() < 150u * fine_stats.components)
         continue;
       level = k;
@@ -1771,10 +1779,7 @@ SpringNetwork layered_network(const ImplicitSurface& surface, const ParticleOpti
     SpringNetwork net(start, coarse);
     total += net.relax(surface);
     const Mesh relaxed = net.mesh();
-    const TopologyStats rs = topology_stats(relaxed);
-    if (!net.converged() || rs.boundary_edges != 0 ||
-        rs.euler_characteristic != fine_stats.euler_characteristic ||
-        rs.components != fine_stats.components) {
+    if (!net.converged() || !closed_like(topology_stats(relaxed), fine_stats)) {
       start = fine;  // the coarse level did not settle: start again from the fine mesh
       break;
     }
@@ -1785,9 +1790,7 @@ SpringNetwork layered_network(const ImplicitSurface& surface, const ParticleOpti
     const double half = 0.5 * coarse.edge_length;
     double sum = 0.0;
     std::size_t count = 0;
-    for (const auto& t : start.triangles)
-      for (int k = 0; k < 3; ++k)
-        sum += (start.positions[t[k]] - start.positions[t[(k + 1) % 3]]).norm(), ++count;
+    for_each_edge_length(start, [&](double l) { sum += l, ++count; });
     const double stretch = sum / static_cast<double>(std::max<std::size_t>(count, 1)) / half;
     if (std::abs(stretch - 1.0) > 0.01) {
       coarse.edge_length /= stretch;
@@ -1796,12 +1799,7 @@ SpringNetwork layered_network(const ImplicitSurface& surface, const ParticleOpti
       coarse.density_tolerance = std::min(options.density_tolerance, 0.01);
       SpringNetwork again(relaxed, coarse);
       total += again.relax(surface);
-      const Mesh second = again.mesh();
-      const TopologyStats ss = topology_stats(second);
-      if (again.converged() && ss.boundary_edges == 0 &&
-          ss.euler_characteristic == fine_stats.euler_characteristic &&
-          ss.components == fine_stats.components)
-        start = subdivide(second, surface);
+      if (same_topology(again, fine_stats)) start = subdivide(again.mesh(), surface);
     }
   }
   SpringNetwork net(start, options);
@@ -1859,13 +1857,6 @@ Mesh subdivide_n(const Mesh& m, int n, const ImplicitSurface& surface) {
   return out;
 }
 
-// Every edge length of a closed mesh (each edge twice, once per face).
-template <class F>
-void for_each_edge_length(const Mesh& m, F&& f) {
-  for (const auto& t : m.triangles)
-    for (int k = 0; k < 3; ++k) f((m.positions[t[k]] - m.positions[t[(k + 1) % 3]]).norm());
-}
-
 // Edge lengths against R: (fraction within +-15 %, largest |l / R - 1|).
 std::pair<double, double> edge_uniformity(const Mesh& m, double R) {
   std::size_t within = 0, count = 0;
@@ -1918,12 +1909,7 @@ std::vector<CoarseCandidate> coarse_candidates(const ImplicitSurface& surface,
   // The candidates are coarsened from the marching-tetrahedra mesh at twice the spacing when
   // it has the fine one's topology (relaxing the fine mesh to 2 R cost most of this search).
   Mesh source = marching_tetrahedra(surface, options.start_spacing * 2.0 * R);
-  const TopologyStats source_stats = topology_stats(source);
-  if (source.triangles.empty() || source_stats.boundary_edges != 0 ||
-      source_stats.nonmanifold_edges != 0 ||
-      source_stats.euler_characteristic != fine_stats.euler_characteristic ||
-      source_stats.components != fine_stats.components)
-    source = fine;
+  if (source.triangles.empty() || !closed_like(topology_stats(source), fine_stats)) source = fine;
   {
     SpringNetwork seed(source, coarse_level(options, 2.0 * R));
     *iterations += seed.relax(surface);

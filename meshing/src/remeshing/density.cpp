@@ -19,10 +19,10 @@ struct Adjacency {
   std::vector<int> first, nbr;
   explicit Adjacency(const TriangleMesh& m) : first(m.pos.size() + 1, 0) {
     for (std::size_t v = 0; v < m.pos.size(); ++v) {
-      std::vector<int> l = m.neighbours(static_cast<int>(v));
-      std::sort(l.begin(), l.end());
-      first[v + 1] = first[v] + static_cast<int>(l.size());
-      nbr.insert(nbr.end(), l.begin(), l.end());
+      const kernel::NeighbourList ring = m.neighbours(static_cast<int>(v));
+      nbr.insert(nbr.end(), ring.begin(), ring.end());
+      std::sort(nbr.begin() + first[v], nbr.end());
+      first[v + 1] = static_cast<int>(nbr.size());
     }
   }
 };

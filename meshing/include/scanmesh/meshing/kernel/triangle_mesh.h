@@ -40,8 +40,8 @@ class SmallIndexList {
   }
   //! Removes the element at `at`, keeping the order of the others.
   void erase(const int* at) {
-    int* d = n_ <= N ? inline_.data() : heap_.data();
-    int* hole = d + (at - d);
+    int* d = mutable_data();
+    int* hole = d + (at - data());
     std::copy(hole + 1, d + n_, hole);
     --n_;
     if (n_ >= N) {
@@ -56,10 +56,7 @@ class SmallIndexList {
     n_ = 0;
     heap_.clear();
   }
-  void sort() {
-    int* d = n_ <= N ? inline_.data() : heap_.data();
-    std::sort(d, d + n_);
-  }
+  void sort() { std::sort(mutable_data(), mutable_data() + n_); }
   std::size_t size() const { return n_; }
   bool empty() const { return n_ == 0; }
   int operator[](std::size_t i) const { return data()[i]; }
@@ -69,6 +66,7 @@ class SmallIndexList {
   operator std::vector<int>() const { return std::vector<int>(begin(), end()); }
 
  private:
+  int* mutable_data() { return n_ <= N ? inline_.data() : heap_.data(); }
   std::array<int, N> inline_;
   std::vector<int> heap_;
   std::size_t n_ = 0;
