@@ -103,9 +103,14 @@ int main(int argc, char** argv) {
     const auto big = test::random_sphere(quick ? 200000 : 1000000, 99);
     // Three runs each: the first (what one CLI call sees: fresh pages for every array) and
     // the median.
-    for (int threads : {2, 1}) {
+    // The default growth in blocks at 2 and 1 threads, then one growth for the whole cloud.
+    for (const auto& [threads, block] :
+         {std::pair<int, std::size_t>{2, FanOptions{}.growth_block_points},
+          {1, FanOptions{}.growth_block_points},
+          {2, 0}}) {
       FanOptions o;
       o.threads = threads;
+      o.growth_block_points = block;
       std::vector<double> times;
       FanResult res;
       for (int run = 0; run < 3; ++run) {
@@ -118,13 +123,15 @@ int main(int argc, char** argv) {
       const double t = times[1];
       const MeshCheckReport r = check_mesh(res.mesh, {.self_intersections = false});
       std::printf(
-          "\nrandom sphere %zu points, %d thread(s): %.2f s median of 3, first run %.2f s "
+          "\nrandom sphere %zu points, %d thread(s), growth in %zu block(s) (%zu discarded): %.2f "
+          "s "
+          "median of 3, first run %.2f s "
           "(last run: normals %.2f, fans %.2f, assembly %.2f), %.0f points/s, %zu triangles, "
           "non-manifold edges %zu, boundary loops %zu, unused %zu, Euler %lld\n",
-          big.size(), threads, t, first, res.stats.seconds_normals, res.stats.seconds_fans,
-          res.stats.seconds_assembly, big.size() / t, r.faces, r.topology.nonmanifold_edges,
-          r.topology.boundary_loops, r.topology.unreferenced_vertices,
-          r.topology.euler_characteristic);
+          big.size(), threads, res.stats.growth_blocks, res.stats.growth_blocks_discarded, t, first,
+          res.stats.seconds_normals, res.stats.seconds_fans, res.stats.seconds_assembly,
+          big.size() / t, r.faces, r.topology.nonmanifold_edges, r.topology.boundary_loops,
+          r.topology.unreferenced_vertices, r.topology.euler_characteristic);
     }
   }
   struct Cloud {

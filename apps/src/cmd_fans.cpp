@@ -97,6 +97,8 @@ nlohmann::json fans_report_json(const std::string& input, const PointCloud& clou
         {"unused_candidates", s.rejected_triangles}}},
       {"surface_growth",
        {{"seeds", s.seeds},
+        {"blocks", s.growth_blocks},
+        {"blocks_discarded", s.growth_blocks_discarded},
         {"glued_triangles", s.glued_triangles},
         {"glues_taken_back", s.unzipped_glues},
         {"hole_triangles", s.hole_triangles},
@@ -149,7 +151,11 @@ int run_fans(const FansArgs& args) {
        << s.open_fans << ", unused candidates " << s.rejected_triangles << ", hole triangles "
        << s.hole_triangles << ", inserted points " << s.inserted_points << ", unused points "
        << s.unused_points << "\n"
-       << "  surface growth: " << s.seeds << " seeds, " << s.glued_triangles << " glued triangles, "
+       << "  surface growth: " << s.growth_blocks << " block(s)"
+       << (s.growth_blocks_discarded ? " (" + std::to_string(s.growth_blocks_discarded) +
+                                           " blocks discarded: the fronts did not close at a cut)"
+                                     : std::string())
+       << ", " << s.seeds << " seeds, " << s.glued_triangles << " glued triangles, "
        << s.unzipped_glues << " glues taken back, " << s.delaunay_flips << " Delaunay flips, "
        << s.bowtie_faces_removed << " faces off bow-ties\n";
   say() << text.str();
@@ -227,6 +233,11 @@ void register_fans_commands(CLI::App& app, CommandList& commands) {
       ->capture_default_str()
       ->check(in_range(0, 1e6));
   fans_cmd->add_flag("--pca-normals", fans->options.pca_normals, "PCA normals for every point");
+  fans_cmd
+      ->add_option("--growth-block", fans->options.growth_block_points,
+                   "Grow the surface in parallel blocks of about this many points (0: one "
+                   "growth); kept only where the blocks' fronts close at every cut")
+      ->capture_default_str();
   fans_cmd->add_option("--threads", fans->options.threads, "Threads (0: all)")
       ->capture_default_str()
       ->check(in_range(0, FanOptions::kMaxThreads));

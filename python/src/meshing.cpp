@@ -27,10 +27,10 @@ namespace {
 py::dict fan_stats(const FanStats& s) {
   py::dict d;
   SCANMESH_PUT_FIELDS(d, s, points, duplicate_points, cell_edge, pca_fallbacks, open_fans,
-                      proposed_triangles, rejected_triangles, seeds, glued_triangles,
-                      unzipped_glues, bowtie_faces_removed, hole_triangles, inserted_points,
-                      delaunay_flips, unused_points, seconds_normals, seconds_fans,
-                      seconds_assembly);
+                      proposed_triangles, rejected_triangles, seeds, growth_blocks,
+                      growth_blocks_discarded, glued_triangles, unzipped_glues,
+                      bowtie_faces_removed, hole_triangles, inserted_points, delaunay_flips,
+                      unused_points, seconds_normals, seconds_fans, seconds_assembly);
   return d;
 }
 

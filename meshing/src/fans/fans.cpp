@@ -115,26 +115,33 @@ struct Context {
   std::vector<std::uint8_t> is_pca;
   std::vector<int> knn;  // kNormalNeighbours per point, -1 padded
   std::vector<double> spacing;
-  Context(const std::vector<Vector3d>& p, const FanOptions& o, double l)
-      : pts(p), opt(o), grid(p, l) {}
+  // `g`: a grid over p.
+  Context(const std::vector<Vector3d>& p, const FanOptions& o, PointGrid&& g)
+      : pts(p), opt(o), grid(std::move(g)) {}
 };
 
-double cell_edge_formula(const std::vector<Vector3d>& pts, int k) {
-  // The box without far outliers: one stray point must not make the cells enormous.
-  const auto [lo, hi] = kernel::robust_box(pts);
-  const Vector3d d = hi - lo;
+// `box`: the points' robust_box(), without far outliers: one stray point must not make the
+// cells enormous.
+double cell_edge_formula(const std::pair<Vector3d, Vector3d>& box, std::size_t points, int k) {
+  const Vector3d d = box.second - box.first;
   // Scaled by the longest side, so that a box spanning 1e200 does not overflow the area to
   // infinity (an infinite cell edge made the cell index of a far point NaN).
   const double s = d.maxCoeff();
   if (!(s > 0)) throw InvalidInputError("build_fans: all points coincide");
   const Vector3d u = d / s;
   const double area = 2.0 * (u.x() * u.y() + u.y() * u.z() + u.x() * u.z());
-  double l = s * std::sqrt(area * k / static_cast<double>(pts.size()));
+  double l = s * std::sqrt(area * k / static_cast<double>(points));
   // A cloud on a line has no bounding-box area; fall back to the 1D spacing.
-  if (!(l > 0)) l = s * k / static_cast<double>(pts.size());
+  if (!(l > 0)) l = s * k / static_cast<double>(points);
   if (!(l > 0) || !std::isfinite(l))
     throw InvalidInputError("build_fans: the points' extent gives no usable cell size");
   return l;
+}
+
+// The grid with the seed's cell edge l for k points per cell.
+PointGrid cell_grid(const std::vector<Vector3d>& pts, int k) {
+  const auto box = kernel::robust_box(pts);
+  return PointGrid(pts, cell_edge_formula(box, pts.size(), k), box);
 }
 
 int omp_threads(const FanOptions& o) { return o.threads > 0 ? o.threads : omp_get_max_threads(); }
@@ -189,7 +196,10 @@ void compute_normals(Context& ctx, const std::vector<Eigen::Vector3f>* given) {
   for (const auto& p : pts) centroid += p;
   centroid /= n;
   std::vector<std::uint8_t> done(n, 0);
-  std::deque<int> queue;
+  // Every point joins the queue once: one array, read from `head` on.
+  std::vector<int> queue;
+  queue.reserve(static_cast<std::size_t>(n));
+  std::size_t head = 0;
   // Propagation runs on the PCA normals (smoother than 3-NN planes); each fan normal is then
   // turned to agree with its point's oriented PCA normal.
   auto& ref = ctx.pca;
@@ -197,9 +207,8 @@ void compute_normals(Context& ctx, const std::vector<Eigen::Vector3f>* given) {
     if ((pts[s] - centroid).dot(ref[s]) < 0) ref[s] = -ref[s];
     done[s] = 1;
     queue.push_back(s);
-    while (!queue.empty()) {
-      const int c = queue.front();
-      queue.pop_front();
+    while (head < queue.size()) {
+      const int c = queue[head++];
       for (int k = 0; k < kNormalNeighbours; ++k) {
         const int j = ctx.knn[c * kNormalNeighbours + k];
         if (j < 0 || done[j]) continue;
@@ -500,6 +509,10 @@ class FaceStar {
     more_.push_back(c);
     ++size_;
   }
+  void clear() {
+    size_ = 0;
+    more_.clear();
+  }
   void erase(int face) {  // keeps the order
     Corner* data = size_ <= kInline ? inline_.data() : more_.data();
     Corner* last = std::remove_if(data, data + size_, [face](const Corner& c) { return c.face == face; });
@@ -609,7 +622,9 @@ class Assembly {
   // `consensus`: all three fans agree on t; when every face around its corners is such a
   // triangle too, they lie in disjoint sectors of each corner's fan and cannot overlap, so
   // the overlap test is skipped (the old assembly added these unchecked).
-  bool try_add(const std::array<int, 3>& t, bool in_3d = false, bool consensus = false) {
+  //! `slot`: a face id from reserve_faces() to fill, or -1 to append.
+  bool try_add(const std::array<int, 3>& t, bool in_3d = false, bool consensus = false,
+               int slot = -1) {
     const Vector3d& A = pts_[t[0]];
     const Vector3d& B = pts_[t[1]];
     const Vector3d& C = pts_[t[2]];
@@ -624,7 +639,7 @@ class Assembly {
       if (directed_edge_used(t[k], t[(k + 1) % 3])) return false;
     const bool skip = consensus && !in_3d && all_consensus_around(t);
     if (!skip && (in_3d ? intersects_star(t) : overlaps_star(t, nrm.normalized()))) return false;
-    add(t, consensus);
+    add(t, consensus, slot);
     return true;
   }
 
@@ -632,8 +647,29 @@ class Assembly {
     return others_around_[t[0]] == 0 && others_around_[t[1]] == 0 && others_around_[t[2]] == 0;
   }
 
-  void add(const std::array<int, 3>& t, bool consensus = false) {
-    const int f = static_cast<int>(faces_.size());
+  //! Back to no faces.
+  void clear() {
+    faces_.clear();
+    alive_.clear();
+    consensus_.clear();
+    open_.clear();
+    std::fill(others_around_.begin(), others_around_.end(), 0);
+    for (FaceStar& s : star_) s.clear();
+  }
+
+  //! Dead face ids [first, first + count) that only add(.., slot) fills: the surface growth's
+  //! blocks each fill their own range in parallel, so no face array grows meanwhile.
+  int reserve_faces(std::size_t count) {
+    const std::size_t first = faces_.size();
+    faces_.resize(first + count, {0, 0, 0});
+    alive_.resize(first + count, 0);
+    consensus_.resize(first + count, 0);
+    open_.resize(first + count, 0);
+    return static_cast<int>(first);
+  }
+
+  void add(const std::array<int, 3>& t, bool consensus = false, int slot = -1) {
+    const int f = slot < 0 ? static_cast<int>(faces_.size()) : slot;
     std::uint8_t open = 0;
     for (int k = 0; k < 3; ++k) {
       if (const Corner* across = corner_with(t[(k + 1) % 3], t[k]))
@@ -641,10 +677,17 @@ class Assembly {
       else
         open |= static_cast<std::uint8_t>(1 << k);
     }
-    faces_.push_back(t);
-    alive_.push_back(1);
-    consensus_.push_back(consensus ? 1 : 0);
-    open_.push_back(open);
+    if (slot < 0) {
+      faces_.push_back(t);
+      alive_.push_back(1);
+      consensus_.push_back(consensus ? 1 : 0);
+      open_.push_back(open);
+    } else {
+      faces_[f] = t;
+      alive_[f] = 1;
+      consensus_[f] = consensus ? 1 : 0;
+      open_[f] = open;
+    }
     for (int k = 0; k < 3; ++k) {
       star_[t[k]].push_back({f, t[(k + 1) % 3], t[(k + 2) % 3]});
       if (!consensus) ++others_around_[t[k]];
@@ -728,15 +771,22 @@ class Assembly {
 };
 
 // The sides of live faces with no face on their other side, as (face, side k: corners k -> k+1),
-// in face order.
-std::vector<std::pair<int, int>> open_sides(const Assembly& as) {
+// in face order; faces from `first` on.
+std::vector<std::pair<int, int>> open_sides(const Assembly& as, std::size_t first = 0,
+                                            std::size_t end = std::numeric_limits<int>::max()) {
   std::vector<std::pair<int, int>> sides;
-  for (std::size_t f = 0; f < as.faces().size(); ++f)
+  for (std::size_t f = first; f < std::min(end, as.faces().size()); ++f)
     if (as.alive()[f])
       for (int k = 0; k < 3; ++k)
         if (as.side_open(static_cast<int>(f), k)) sides.emplace_back(static_cast<int>(f), k);
   return sides;
 }
+
+// Face ids reserved for one block of a parallel surface growth (first -1: none, append).
+struct FaceSlots {
+  int first = -1;
+  std::size_t size = 0;
+};
 
 // ---------------------------------------------------------------------------------------------
 // Surface growth: the fan triangles are candidates, and the mesh grows from seed triangles
@@ -752,19 +802,39 @@ class SurfaceGrowth {
   static constexpr int kGlueVotes = 2;
 
  public:
+  //! Grows over the vertices [first, end) with the candidates not yet `used` whose corners all
+  //! lie there. `slots`: the growth fills the faces from reserve_faces(slots.size) (one block
+  //! of a parallel growth; each face uses up a candidate, so the block's candidates bound its
+  //! faces); without, it appends.
   SurfaceGrowth(Assembly& as, const std::vector<Vector3d>& pts,
-                const std::vector<std::array<int, 4>>& cands, int n)
-      : as_(as), pts_(pts), cands_(cands), used_(cands.size(), 0), start_(n + 1, 0),
-        waiting_(n) {
-    for (const auto& c : cands)
-      for (int k = 0; k < 3; ++k) ++start_[c[k] + 1];
-    for (int v = 0; v < n; ++v) start_[v + 1] += start_[v];
-    list_.resize(start_[n]);
-    std::vector<int> fill(start_.begin(), start_.end() - 1);
+                const std::vector<std::array<int, 4>>& cands, std::vector<std::uint8_t>& used,
+                int first, int end, FaceSlots slots = {}, std::vector<int>* candidate_of = nullptr)
+      : as_(as),
+        pts_(pts),
+        cands_(cands),
+        used_(used),
+        candidate_of_(candidate_of),
+        first_(first),
+        start_(static_cast<std::size_t>(end - first) + 1, 0),
+        waiting_(end - first),
+        next_slot_(slots.first),
+        slots_end_(slots.first + static_cast<int>(slots.size)),
+        first_face_(slots.first < 0 ? 0 : slots.first) {
+    const auto inside = [&](int v) { return v >= first && v < end; };
     for (std::size_t i = 0; i < cands.size(); ++i) {
       const auto& c = cands[i];
+      if (!used[i] && inside(c[0]) && inside(c[1]) && inside(c[2]))
+        mine_.push_back(static_cast<int>(i));
+    }
+    for (int i : mine_)
+      for (int k = 0; k < 3; ++k) ++start_[cands[i][k] - first + 1];
+    for (std::size_t v = 0; v + 1 < start_.size(); ++v) start_[v + 1] += start_[v];
+    list_.resize(start_.back());
+    std::vector<int> fill(start_.begin(), start_.end() - 1);
+    for (int i : mine_) {
+      const auto& c = cands[i];
       for (int k = 0; k < 3; ++k)
-        list_[fill[c[k]]++] = {static_cast<int>(i), c[3], {c[(k + 1) % 3], c[(k + 2) % 3]}};
+        list_[fill[c[k] - first]++] = {i, c[3], {c[(k + 1) % 3], c[(k + 2) % 3]}};
     }
   }
 
@@ -774,26 +844,21 @@ class SurfaceGrowth {
   // before the next seed.
   void grow() {
     for (int votes = 3; votes >= 1; --votes)
-      for (std::size_t i = 0; i < cands_.size(); ++i) {
+      for (const int i : mine_) {
         const auto& c = cands_[i];
         if (used_[i] || c[3] != votes) continue;
         if (has_faces(c[0]) || has_faces(c[1]) || has_faces(c[2])) continue;
-        if (!as_.try_add({c[0], c[1], c[2]}, false, votes == 3)) continue;
+        if (!add_face(i, votes == 3)) continue;
         used_[i] = 1;
         ++seeds_;
-        push_edges_of(newest_face());
+        push_edges_of(newest_);
         drain(false);
       }
     // Fronts that met stall where a candidate's third corner is on the boundary but shares no
     // edge with the new face ("glue"): allowed now, one at a time, each followed by the normal
     // growth, which zips the two fronts together from the glued vertex.
-    std::vector<HalfEdge> open;
-    for (const auto& [f, k] : open_sides(as_)) {
-      const auto& t = as_.faces()[f];
-      open.push_back({t[k], t[(k + 1) % 3], f});
-    }
-    for (const HalfEdge& e : open) {
-      const std::size_t before = as_.faces().size();
+    for (const HalfEdge& e : open_half_edges()) {
+      const int before = next_face();
       const std::size_t log_before = log_.size();
       if (!attach(e, kGlueVotes, true)) continue;
       const int w = as_.faces()[before][2];
@@ -801,8 +866,9 @@ class SurfaceGrowth {
       // A glue the growth could not zip from the glued vertex leaves a bow-tie: the glue and
       // what grew after it are taken back (their candidates, but the glue's, usable again).
       if (wedges_at(w) > 1) {
-        for (std::size_t f = before; f < as_.faces().size(); ++f)
-          if (as_.alive()[f]) as_.remove(static_cast<int>(f));
+        for (int f = before; f < next_face(); ++f)
+          if (as_.alive()[f]) as_.remove(f);
+        if (next_slot_ >= 0) next_slot_ = before;  // the block's slots are reused
         for (std::size_t i = log_before + 1; i < log_.size(); ++i) used_[log_[i]] = 0;
         log_.resize(log_before);
         for (auto& q : queue_) q.clear();
@@ -812,12 +878,20 @@ class SurfaceGrowth {
     }
   }
 
+  // After the blocks of a parallel growth: their fronts grow on across the blocks' borders
+  // (where they meet, the glue step above zips them), then the usual seeds and glues.
+  // Each front is grown out before the next, in face order.
+  void resume() {
+    for (const HalfEdge& e : open_half_edges()) {
+      queue_[3].push_back(e);
+      drain(false);
+    }
+    grow();
+  }
+
   std::size_t seeds() const { return seeds_; }
   std::size_t glued() const { return glued_; }
   std::size_t unzipped() const { return unzipped_; }
-  std::size_t unused_candidates() const {
-    return static_cast<std::size_t>(std::count(used_.begin(), used_.end(), 0));
-  }
 
  private:
   // A boundary half-edge u -> v and the face it was found on.
@@ -830,6 +904,36 @@ class SurfaceGrowth {
   };
 
   bool has_faces(int v) const { return !as_.star()[v].empty(); }
+
+  // The next face id add_face() gives.
+  int next_face() const {
+    return next_slot_ >= 0 ? next_slot_ : static_cast<int>(as_.faces().size());
+  }
+  bool add_face(int cand, bool consensus) {
+    const auto& c = cands_[cand];
+    return add_face({c[0], c[1], c[2]}, consensus, cand);
+  }
+  bool add_face(const std::array<int, 3>& t, bool consensus, int cand) {
+    if (next_slot_ >= slots_end_ && next_slot_ >= 0)
+      throw std::logic_error("surface growth: a block made more faces than it has candidates");
+    const int f = next_face();
+    if (!as_.try_add(t, false, consensus, next_slot_)) return false;
+    newest_ = f;
+    if (next_slot_ >= 0) ++next_slot_;
+    if (candidate_of_) (*candidate_of_)[f] = cand;
+    return true;
+  }
+  // The boundary half-edges of this growth's faces, in face order.
+  std::vector<HalfEdge> open_half_edges() const {
+    std::vector<HalfEdge> open;
+    const std::size_t end =
+        next_slot_ >= 0 ? static_cast<std::size_t>(slots_end_) : as_.faces().size();
+    for (const auto& [f, k] : open_sides(as_, static_cast<std::size_t>(first_face_), end)) {
+      const auto& t = as_.faces()[f];
+      open.push_back({t[k], t[(k + 1) % 3], f});
+    }
+    return open;
+  }
 
   int wedges_at(int v) const {
     std::vector<int> label;
@@ -852,17 +956,17 @@ class SurfaceGrowth {
     out.clear();
     const int u = e.u, v = e.v;
     int x = -1;
-    if (as_.alive()[e.face]) {
-      // Faces never change their corners, so a live face still has its side u -> v.
-      const auto& t = as_.faces()[e.face];
-      const int k = t[0] == u ? 0 : t[1] == u ? 1 : 2;
+    const auto& t = as_.faces()[e.face];
+    const int k = t[0] == u ? 0 : t[1] == u ? 1 : 2;
+    // A live face with the side u -> v (a block's growth reuses the ids of faces it took back).
+    if (as_.alive()[e.face] && t[k] == u && t[(k + 1) % 3] == v) {
       if (!as_.side_open(e.face, k)) return;  // no longer a boundary edge
       x = t[(k + 2) % 3];
     } else {  // the face was taken back; another may have the side now
       x = as_.third_vertex(u, v);
       if (x < 0 || as_.directed_edge_used(v, u)) return;
     }
-    for (int i = start_[u]; i < start_[u + 1]; ++i) {
+    for (int i = start_[u - first_]; i < start_[u - first_ + 1]; ++i) {
       const Incidence& c = list_[i];
       if (c.other[0] != v && c.other[1] != v) continue;
       if (used_[c.cand]) continue;
@@ -902,21 +1006,19 @@ class SurfaceGrowth {
       const Join join = join_at(u, v, o.w, glue);
       if (join == Join::Refused) {
         // Only a face at w can change that: the edge waits for one.
-        waiting_[o.w].push_back(e);
+        waiting_[o.w - first_].push_back(e);
         continue;
       }
       const bool glued = join == Join::Glue;
-      if (!as_.try_add({v, u, o.w}, false, o.votes == 3)) continue;
+      if (!add_face({v, u, o.w}, o.votes == 3, o.cand)) continue;
       used_[o.cand] = 1;
       log_.push_back(o.cand);
       if (glued) ++glued_;
-      push_edges_of(newest_face());
+      push_edges_of(newest_);
       return true;
     }
     return false;
   }
-
-  int newest_face() const { return static_cast<int>(as_.faces().size()) - 1; }
 
   // Queues the new face's free edges, and the edges that waited for one of its corners.
   void push_edges_of(int f) {
@@ -924,15 +1026,19 @@ class SurfaceGrowth {
     for (int k = 0; k < 3; ++k)
       if (as_.side_open(f, k)) queue_[3].push_back({t[k], t[(k + 1) % 3], f});
     for (int a : t) {
-      for (const auto& e : waiting_[a]) queue_[3].push_back(e);
-      waiting_[a].clear();
+      auto& waiting = waiting_[a - first_];
+      for (const auto& e : waiting) queue_[3].push_back(e);
+      waiting.clear();
     }
   }
 
   Assembly& as_;
   const std::vector<Vector3d>& pts_;
   const std::vector<std::array<int, 4>>& cands_;
-  std::vector<std::uint8_t> used_;
+  std::vector<std::uint8_t>& used_;  // shared by a parallel growth's blocks: disjoint entries
+  std::vector<int>* candidate_of_;   // when given: the candidate of each face made
+  std::vector<int> mine_;            // this growth's candidates, in their order
+  int first_;                        // its first vertex: the per-vertex arrays start there
   // A candidate as seen from one of its corners, with the other two corners in place: the
   // growth scans a vertex's candidates for every boundary edge, and reading them from the
   // candidate array was a cache miss each.
@@ -946,6 +1052,9 @@ class SurfaceGrowth {
   std::vector<Option> options_;
   std::vector<std::vector<HalfEdge>> waiting_;  // edges stalled on a vertex
   std::vector<int> log_;  // candidates in the order they joined
+  int next_slot_, slots_end_;  // a block's next reserved face and the end of its range
+  int first_face_;             // the first face this growth made
+  int newest_ = -1;
   std::size_t seeds_ = 0, glued_ = 0, unzipped_ = 0;
 };
 
@@ -1351,11 +1460,17 @@ void check_input(const std::vector<Vector3d>& points, const FanOptions& options)
     if (!p.allFinite()) throw InvalidInputError("build_fans: a point has a non-finite coordinate");
 }
 
-// Points reordered by grid cell, so that neighbours are close in memory (the fans touch the
-// positions and normals of all neighbours; in input order that is a cache miss each).
-std::vector<int> cell_order(const std::vector<Vector3d>& points, int k) {
-  const PointGrid g(points, cell_edge_formula(points, k));
-  return g.order();
+// The points in cell order, so that neighbours are close in memory (the fans touch the
+// positions and normals of all neighbours; in input order that is a cache miss each), and the
+// grid over them.
+struct SortedPoints {
+  std::vector<int> perm;  // sorted index -> input index
+  std::vector<Vector3d> points;
+};
+SortedPoints sort_by_cell(const std::vector<Vector3d>& input, const PointGrid& grid) {
+  SortedPoints s{grid.order(), std::vector<Vector3d>(input.size())};
+  for (std::size_t i = 0; i < s.perm.size(); ++i) s.points[i] = input[s.perm[i]];
+  return s;
 }
 
 // Whether two points share a position. Copies fall into one grid cell, and cells hold a few
@@ -1406,10 +1521,9 @@ void FanOptions::validate() const {
 std::vector<Vector3d> estimate_fan_normals(const std::vector<Vector3d>& input,
                                            const FanOptions& options) {
   check_input(input, options);
-  const std::vector<int> perm = cell_order(input, options.k);
-  std::vector<Vector3d> points(input.size());
-  for (std::size_t i = 0; i < perm.size(); ++i) points[i] = input[perm[i]];
-  Context ctx(points, options, cell_edge_formula(points, options.k));
+  PointGrid grid = cell_grid(input, options.k);
+  const auto [perm, points] = sort_by_cell(input, grid);
+  Context ctx(points, options, std::move(grid).reordered(points));
   compute_normals(ctx, nullptr);
   std::vector<Vector3d> out(input.size());
   for (std::size_t i = 0; i < perm.size(); ++i) out[perm[i]] = ctx.normals[i];
@@ -1519,6 +1633,159 @@ std::vector<std::array<int, 4>> vote_triangles(const std::vector<std::vector<Fan
   return proposals;
 }
 
+// The surface growth's blocks: each starts at the first point of a layer of cells (z = const),
+// the one nearest to each share of `per_block` points, so that blocks are slabs of space, which
+// their triangles cannot leave (a block cut inside a cell or a row had triangles of two blocks
+// overlapping without a shared corner, where none of the assembly's tests looks). `starts`
+// ends with n. `cuts`: the points of the two layers at each cut, whose faces the blocks'
+// growths built without the candidates across the cut; `near_cuts`: of the four layers there.
+struct GrowthBlocks {
+  std::vector<int> starts;
+  std::vector<std::pair<int, int>> cuts, near_cuts;
+};
+GrowthBlocks growth_blocks(const PointGrid& grid, int n, std::size_t per_block) {
+  GrowthBlocks g{{0}, {}};
+  auto& starts = g.starts;
+  const int blocks = per_block == 0 ? 1 : static_cast<int>(std::max<std::size_t>(1, n / per_block));
+  const auto& dims = grid.dims();
+  const std::size_t layer = static_cast<std::size_t>(dims[0]) * dims[1];
+  std::size_t z = 1;
+  for (int b = 1; b < blocks; ++b) {
+    const auto target = static_cast<std::size_t>(static_cast<std::int64_t>(n) * b / blocks);
+    while (z < static_cast<std::size_t>(dims[2]) && grid.cell_begin((z + 1) * layer) <= target) ++z;
+    if (z >= static_cast<std::size_t>(dims[2])) break;
+    // the nearer of the layer boundaries below and above the target
+    std::size_t cut = grid.cell_begin(z * layer);
+    if (z + 1 < static_cast<std::size_t>(dims[2]) &&
+        grid.cell_begin((z + 1) * layer) - target < target - cut)
+      cut = grid.cell_begin(++z * layer);
+    if (cut > static_cast<std::size_t>(starts.back()) && cut < static_cast<std::size_t>(n)) {
+      starts.push_back(static_cast<int>(cut));
+      // the points of the layers [z - w, z + w), within the grid
+      auto layers = [&](std::size_t w) {
+        const std::size_t lo = z >= w ? z - w : 0;
+        const std::size_t hi = std::min<std::size_t>(z + w, static_cast<std::size_t>(dims[2]));
+        return std::pair(static_cast<int>(grid.cell_begin(lo * layer)),
+                         static_cast<int>(grid.cell_begin(hi * layer)));
+      };
+      g.cuts.push_back(layers(1));
+      g.near_cuts.push_back(layers(2));
+    }
+    ++z;
+  }
+  starts.push_back(n);
+  return g;
+}
+
+// Hole closing as the options ask (close_holes).
+std::size_t close_small_holes(Assembly& as, const Context& ctx) {
+  if (ctx.opt.max_hole_edges < 3) return 0;
+  return close_holes(
+      as, ctx.pts, ctx.normals, ctx.opt.max_hole_edges,
+      ctx.opt.max_edge > 0 ? ctx.opt.max_edge : std::numeric_limits<double>::infinity());
+}
+
+// What the surface growths report.
+struct GrowthCounts {
+  std::size_t seeds = 0, glued = 0, unzipped = 0, hole_triangles = 0;
+  void add(const SurfaceGrowth& g) {
+    seeds += g.seeds();
+    glued += g.glued();
+    unzipped += g.unzipped();
+  }
+};
+
+// The surface growth in blocks of consecutive points: points are in cell order, so a block is a
+// slab of space, and its growth touches only its own vertices and faces; the blocks grow in
+// parallel. The faces at the cuts are then taken back (their candidates usable again) and one
+// growth builds them anew from the blocks' fronts with every candidate; then the holes are
+// closed. Returns false, with the assembly and `used` to be reset, when a boundary edge is left
+// near a cut: the fronts met there without closing (noisy clouds), where one growth for the
+// whole cloud might not leave a hole.
+bool grow_in_blocks(Assembly& as, const Context& ctx,
+                    const std::vector<std::array<int, 4>>& proposals, const GrowthBlocks& split,
+                    std::vector<std::uint8_t>& used, GrowthCounts& counts) {
+  const auto& points = ctx.pts;
+  const std::vector<int>& starts = split.starts;
+  const int blocks = static_cast<int>(starts.size()) - 1;
+  auto block_of = [&](int v) {
+    return static_cast<int>(std::upper_bound(starts.begin(), starts.end(), v) - starts.begin()) - 1;
+  };
+  std::vector<std::size_t> inside(blocks, 0);  // candidates with all corners in the block
+  for (const auto& c : proposals) {
+    const int b = block_of(c[0]);
+    if (block_of(c[1]) == b && block_of(c[2]) == b) ++inside[b];
+  }
+  std::vector<FaceSlots> slots(blocks);
+  for (int b = 0; b < blocks; ++b) slots[b] = {as.reserve_faces(inside[b]), inside[b]};
+  std::vector<GrowthCounts> block_counts(blocks);
+  std::vector<int> candidate_of(as.faces().size(), -1);
+#pragma omp parallel for num_threads(omp_threads(ctx.opt)) schedule(dynamic, 1)
+  for (int b = 0; b < blocks; ++b) {
+    SurfaceGrowth g(as, points, proposals, used, starts[b], starts[b + 1], slots[b], &candidate_of);
+    g.grow();
+    block_counts[b].add(g);
+  }
+  for (const auto& c : block_counts) {
+    counts.seeds += c.seeds;
+    counts.glued += c.glued;
+    counts.unzipped += c.unzipped;
+  }
+  auto within = [](const std::vector<std::pair<int, int>>& ranges, int v) {
+    for (const auto& [first, end] : ranges)
+      if (v >= first && v < end) return true;
+    return false;
+  };
+  for (std::size_t f = 0; f < candidate_of.size(); ++f) {
+    const auto& t = as.faces()[f];
+    if (!as.alive()[f] ||
+        !(within(split.cuts, t[0]) || within(split.cuts, t[1]) || within(split.cuts, t[2])))
+      continue;
+    as.remove(static_cast<int>(f));
+    used[candidate_of[f]] = 0;
+  }
+  SurfaceGrowth across(as, points, proposals, used, 0, static_cast<int>(points.size()));
+  across.resume();
+  counts.add(across);
+  counts.hole_triangles = close_small_holes(as, ctx);
+  for (const auto& [f, k] : open_sides(as)) {
+    const auto& t = as.faces()[f];
+    if (within(split.near_cuts, t[k]) || within(split.near_cuts, t[(k + 1) % 3])) return false;
+  }
+  return true;
+}
+
+// The surface growth and hole closing; the growth in blocks (above) when the options ask for
+// them and the cloud has room for several. The blocks depend on the cloud only, so the result does
+// not depend on the thread count.
+void grow_surface(Assembly& as, const Context& ctx,
+                  const std::vector<std::array<int, 4>>& proposals, FanStats& st) {
+  const int n = static_cast<int>(ctx.pts.size());
+  std::vector<std::uint8_t> used(proposals.size(), 0);
+  const GrowthBlocks split = growth_blocks(ctx.grid, n, ctx.opt.growth_block_points);
+  GrowthCounts counts;
+  const bool blocks = split.starts.size() > 2;
+  st.growth_blocks = split.starts.size() - 1;
+  if (!blocks || !grow_in_blocks(as, ctx, proposals, split, used, counts)) {
+    if (blocks) {  // start over as one growth
+      as.clear();
+      std::fill(used.begin(), used.end(), 0);
+      counts = {};
+      st.growth_blocks = 1;
+      st.growth_blocks_discarded = split.starts.size() - 1;
+    }
+    SurfaceGrowth g(as, ctx.pts, proposals, used, 0, n);
+    g.grow();
+    counts.add(g);
+    counts.hole_triangles = close_small_holes(as, ctx);
+  }
+  st.hole_triangles = counts.hole_triangles;
+  st.seeds = counts.seeds;
+  st.glued_triangles = counts.glued;
+  st.unzipped_glues = counts.unzipped;
+  st.rejected_triangles = static_cast<std::size_t>(std::count(used.begin(), used.end(), 0));
+}
+
 // The assembly's triangles oriented, mapped back to the input's order, turned round as a whole
 // if they enclose a negative volume (without trusted normals), with the points' normals.
 void write_mesh(const Assembly& as, const std::vector<Vector3d>& input,
@@ -1526,7 +1793,7 @@ void write_mesh(const Assembly& as, const std::vector<Vector3d>& input,
                 const Context& ctx, bool trust_normals, const FanOptions& options,
                 FanResult& result) {
   const int n = static_cast<int>(points.size());
-  const auto [lo, hi] = kernel::robust_box(points);
+  const auto [lo, hi] = ctx.grid.box();
   Mesh& mesh = result.mesh;
   mesh.positions = input;
   std::vector<std::array<int, 3>> faces;
@@ -1553,35 +1820,37 @@ void write_mesh(const Assembly& as, const std::vector<Vector3d>& input,
   double area = 0;
   for (const double a : doubled_area) area += a;
   const bool flip = !trust_normals && volume < -1e-3 * area * (hi - lo).norm();
-  if (flip)
-    for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
+  if (flip) {
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (std::ptrdiff_t f = 0; f < nf; ++f) std::swap(mesh.triangles[f][1], mesh.triangles[f][2]);
+  }
   mesh.normals.resize(n);
-  for (int i = 0; i < n; ++i)
+  std::size_t unused = 0;  // points in no face: their stars are empty
+#pragma omp parallel for num_threads(threads) schedule(static) reduction(+ : unused)
+  for (int i = 0; i < n; ++i) {
     mesh.normals[perm[i]] = (flip ? -ctx.normals[i] : ctx.normals[i]).cast<float>();
-  std::vector<std::uint8_t> used(n, 0);
-  for (const auto& t : mesh.triangles)
-    for (int v : t) used[v] = 1;
-  result.stats.unused_points = static_cast<std::size_t>(std::count(used.begin(), used.end(), 0));
+    unused += as.star()[i].empty() ? 1 : 0;
+  }
+  result.stats.unused_points = unused;
 }
 
-// `perm`: the points' cell order (cell_order), computed here when empty.
+// `grid`: the cell grid over `input` (cell_grid), built here when absent.
 FanResult build_fans_distinct(const std::vector<Vector3d>& input, const FanOptions& options,
                               const std::vector<Eigen::Vector3f>* given_normals,
-                              std::vector<int> perm = {}) {
+                              std::optional<PointGrid> grid = std::nullopt) {
   check_input(input, options);
   // Internally the points are in cell order; indices are mapped back at the end.
-  if (perm.empty()) perm = cell_order(input, options.k);
-  std::vector<Vector3d> points(input.size());
-  for (std::size_t i = 0; i < perm.size(); ++i) points[i] = input[perm[i]];
+  if (!grid) grid.emplace(cell_grid(input, options.k));
+  const auto [perm, points] = sort_by_cell(input, *grid);
   FanResult result;
   FanStats& st = result.stats;
   st.points = points.size();
   const int n = static_cast<int>(points.size());
   auto t0 = std::chrono::steady_clock::now();
-  Context ctx(points, options, cell_edge_formula(points, options.k));
+  Context ctx(points, options, std::move(*grid).reordered(points));
   st.cell_edge = ctx.grid.cell_edge();
   check_crowding(ctx.grid, n);
-  const auto [lo, hi] = kernel::robust_box(points);
+  const auto [lo, hi] = ctx.grid.box();
   ctx.eps_len = 1e-9 * (hi - lo).norm();  // Gap (4b): "falls on c"
   ctx.d_max = options.dmax_factor * st.cell_edge;
   std::vector<Eigen::Vector3f> given_sorted;
@@ -1600,18 +1869,9 @@ FanResult build_fans_distinct(const std::vector<Vector3d>& input, const FanOptio
   const std::vector<std::array<int, 4>> proposals = vote_triangles(fans, options);
   st.proposed_triangles = proposals.size();
   Assembly as(points, 1e-9);
-  SurfaceGrowth growth(as, points, proposals, n);
-  growth.grow();
-  st.seeds = growth.seeds();
-  st.glued_triangles = growth.glued();
-  st.unzipped_glues = growth.unzipped();
-  st.rejected_triangles = growth.unused_candidates();
   fans.clear();
   fans.shrink_to_fit();
-  if (options.max_hole_edges >= 3)
-    st.hole_triangles = close_holes(
-        as, points, ctx.normals, options.max_hole_edges,
-        options.max_edge > 0 ? options.max_edge : std::numeric_limits<double>::infinity());
+  grow_surface(as, ctx, proposals, st);
   st.inserted_points = insert_unused(as, ctx);
   st.delaunay_flips = flip_to_delaunay(as, points, omp_threads(options));
   st.bowtie_faces_removed = detach_bowties(as, n, omp_threads(options));
@@ -1632,11 +1892,11 @@ FanResult build_fans_impl(const std::vector<Vector3d>& input, const FanOptions& 
   // no usable cell size until the copies are gone: it goes the sorting way below.
   std::optional<PointGrid> grid;
   try {
-    grid.emplace(input, cell_edge_formula(input, options.k));
+    grid.emplace(cell_grid(input, options.k));
   } catch (const InvalidInputError&) {
   }
   if (grid && !has_duplicates(*grid, input, omp_threads(options)))
-    return build_fans_distinct(input, options, given_normals, grid->order());
+    return build_fans_distinct(input, options, given_normals, std::move(grid));
   grid.reset();
   const int n = static_cast<int>(input.size());
   std::vector<int> order(n);

@@ -62,9 +62,13 @@ class PointGrid {
   //! The grid spans `robust_box(points)`: far outliers fall into the border cells, which reach to
   //! infinity, so one point at 1e20 neither makes the grid astronomically large nor puts every
   //! other point into one cell.
-  PointGrid(const std::vector<Eigen::Vector3d>& points, double cell_edge) : points_(points) {
-    const auto [lo, hi] = robust_box(points);
-    lo_ = lo;
+  PointGrid(const std::vector<Eigen::Vector3d>& points, double cell_edge)
+      : PointGrid(points, cell_edge, robust_box(points)) {}
+  //! With the points' robust_box() already at hand.
+  PointGrid(const std::vector<Eigen::Vector3d>& points, double cell_edge,
+            const std::pair<Eigen::Vector3d, Eigen::Vector3d>& box)
+      : points_(points), lo_(box.first), hi_(box.second) {
+    const Eigen::Vector3d& hi = hi_;
     cell_ = cell_edge;
     const double limit = 8.0 * static_cast<double>(points.size()) + 64.0;
     while (true) {
@@ -95,7 +99,17 @@ class PointGrid {
       order_[fill[cell_of[i]]++] = static_cast<int>(i);
   }
 
+  //! This grid over `sorted`, the same points in this grid's order (sorted[i] is the point
+  //! order()[i]): a caller that puts its points into cell order needs no second grid.
+  PointGrid reordered(const std::vector<Eigen::Vector3d>& sorted) && {
+    PointGrid g(std::move(*this), sorted);
+    for (std::size_t i = 0; i < g.order_.size(); ++i) g.order_[i] = static_cast<int>(i);
+    return g;
+  }
+
   double cell_edge() const { return cell_; }
+  //! The box the cells span (the points' robust_box()).
+  std::pair<Eigen::Vector3d, Eigen::Vector3d> box() const { return {lo_, hi_}; }
   //! The most points any one cell holds (a crowded cell makes every query there O(its size)).
   std::size_t fullest_cell() const {
     std::size_t most = 0;
@@ -113,6 +127,9 @@ class PointGrid {
   const std::vector<int>& order() const { return order_; }
   //! Number of cells; the points of cell c are order()[cell_begin(c) .. cell_begin(c + 1)).
   std::size_t cells() const { return start_.size() - 1; }
+  //! Cells per axis; a cell's index is (z * dims[1] + y) * dims[0] + x, so the points of the
+  //! layers z < k come first in order(): the first cell_begin(k * dims[0] * dims[1]).
+  const std::array<int, 3>& dims() const { return dims_; }
   std::size_t cell_begin(std::size_t c) const { return start_[c]; }
 
   //! Calls f(index, squared distance) for every point with |p - c| <= r.
@@ -194,6 +211,15 @@ class PointGrid {
   static constexpr double kPi = 3.14159265358979323846;
   static constexpr double kHuge = 1e300;
 
+  PointGrid(PointGrid&& other, const std::vector<Eigen::Vector3d>& points)
+      : points_(points),
+        lo_(other.lo_),
+        hi_(other.hi_),
+        cell_(other.cell_),
+        dims_(other.dims_),
+        start_(std::move(other.start_)),
+        order_(std::move(other.order_)) {}
+
   std::size_t points_in_cell_of(const Eigen::Vector3d& p) const {
     const auto c = coord(p);
     const std::size_t cell = flat(c[0], c[1], c[2]);
@@ -215,7 +241,7 @@ class PointGrid {
   }
 
   const std::vector<Eigen::Vector3d>& points_;
-  Eigen::Vector3d lo_;
+  Eigen::Vector3d lo_, hi_;
   double cell_ = 1.0;
   std::array<int, 3> dims_{1, 1, 1};
   std::vector<std::uint32_t> start_;  // n < 2^31 (checked by build_fans)

@@ -46,6 +46,39 @@ TEST_P(RandomSphere, IsClosedCorrectAndComplete) {
 
 INSTANTIATE_TEST_SUITE_P(Fans, RandomSphere, ::testing::Values(5000, 10000, 40000));
 
+// The surface growth in parallel blocks (slabs of space joined across their cuts afterwards):
+// on a clean closed surface the blocks are kept and the mesh is as closed and complete.
+TEST(FansGrowthInBlocks, SphereGrownInBlocksIsClosedCorrectAndComplete) {
+  const auto pts = test::random_sphere(40000, 2002);
+  FanOptions options;
+  options.growth_block_points = 8000;
+  const FanResult res = build_fans(pts, options);
+  EXPECT_GE(res.stats.growth_blocks, 3u);
+  EXPECT_EQ(res.stats.growth_blocks_discarded, 0u);
+  const MeshCheckReport r = check_mesh(res.mesh);
+  SCOPED_TRACE(r.to_text());
+  expect_correct(r);
+  EXPECT_EQ(r.topology.boundary_loops, 0u);
+  EXPECT_EQ(r.topology.euler_characteristic, 2);
+  EXPECT_EQ(r.nonmanifold_vertices, 0u);
+  EXPECT_EQ(r.faces, 2 * pts.size() - 4);
+  // the same share of well-shaped triangles as one growth, within a tenth of a point
+  const MeshCheckReport one = check_mesh(build_fans(pts).mesh);
+  EXPECT_NEAR(r.fraction_min_angle_ge_30, one.fraction_min_angle_ge_30, 0.001);
+}
+
+TEST(FansGrowthInBlocks, SameTrianglesForAnyThreadCount) {
+  const auto pts = test::random_sphere(20000, 11);
+  FanOptions one;
+  one.threads = 1;
+  one.growth_block_points = 5000;
+  FanOptions two = one;
+  two.threads = 2;
+  const FanResult with_two = build_fans(pts, two);
+  EXPECT_GT(with_two.stats.growth_blocks, 1u);
+  EXPECT_EQ(build_fans(pts, one).mesh.triangles, with_two.mesh.triangles);
+}
+
 TEST(FansRobustness, NoisySphereStaysEdgeManifoldWithoutIntersections) {
   auto pts = test::random_sphere(20000, 5);
   // radial noise of 10 % of the mean spacing (0.025): 3-NN normals fall back to PCA
