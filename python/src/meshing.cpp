@@ -224,11 +224,11 @@ void bind_fans(py::module_& m) {
       [](py::handle points, py::handle normals, py::handle colors, int k, double alpha_deg,
          double dmax_factor, double max_edge, double max_edge_factor, double max_normal_angle_deg,
          int max_hole_edges, bool pca_normals, bool orient_away_from_axis, std::uint64_t seed,
-         int threads) {
+         int threads, std::size_t growth_block_points) {
         FanOptions o;
         SCANMESH_SET_FIELDS(o, k, alpha_deg, dmax_factor, max_edge, max_edge_factor,
                             max_normal_angle_deg, max_hole_edges, pca_normals,
-                            orient_away_from_axis, seed, threads);
+                            orient_away_from_axis, seed, threads, growth_block_points);
         o.validate();
         FanResult r;
         if (py::isinstance<PointCloud>(points)) {
@@ -259,14 +259,16 @@ void bind_fans(py::module_& m) {
       py::arg("max_normal_angle_deg") = fo.max_normal_angle_deg,
       py::arg("max_hole_edges") = fo.max_hole_edges, py::arg("pca_normals") = fo.pca_normals,
       py::arg("orient_away_from_axis") = fo.orient_away_from_axis, py::arg("seed") = fo.seed,
-      py::arg("threads") = fo.threads, R"doc(
+      py::arg("threads") = fo.threads, py::arg("growth_block_points") = fo.growth_block_points,
+      R"doc(
 Seed 002's point-cloud fans (build_fans, as `scanmesh fans`; docs/fans.md). points: an (N, 3)
 array (optionally with normals (N, 3), which decide the outside, and colors (N, 3) uint8) or a
 PointCloud (read_point_cloud; non-finite points dropped). The keyword arguments are FanOptions
 with the library defaults: k (points per cell), alpha_deg (completeness angle), dmax_factor,
 max_edge, max_edge_factor, max_normal_angle_deg, max_hole_edges, pca_normals,
 orient_away_from_axis (the CLI sets it for .smg clouds), seed, threads (0: all; the output does
-not depend on it). The mesh's vertices are the input points, in order.
+not depend on it), growth_block_points (parallel surface growth in blocks of about this many
+points; 0: one growth). The mesh's vertices are the input points, in order.
 Returns (Mesh, stats dict). ValueError with the library's message for invalid options, fewer
 than 3 points or non-finite coordinates.)doc");
 }

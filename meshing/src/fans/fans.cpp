@@ -823,7 +823,8 @@ class SurfaceGrowth {
     const auto inside = [&](int v) { return v >= first && v < end; };
     for (std::size_t i = 0; i < cands.size(); ++i) {
       const auto& c = cands[i];
-      if (!used[i] && inside(c[0]) && inside(c[1]) && inside(c[2]))
+      // corners first: the other blocks' growths are writing their candidates' flags
+      if (inside(c[0]) && inside(c[1]) && inside(c[2]) && !used[i])
         mine_.push_back(static_cast<int>(i));
     }
     for (int i : mine_)
@@ -1649,29 +1650,36 @@ GrowthBlocks growth_blocks(const PointGrid& grid, int n, std::size_t per_block) 
   const int blocks = per_block == 0 ? 1 : static_cast<int>(std::max<std::size_t>(1, n / per_block));
   const auto& dims = grid.dims();
   const std::size_t layer = static_cast<std::size_t>(dims[0]) * dims[1];
-  std::size_t z = 1;
+  const auto layers_total = static_cast<std::size_t>(dims[2]);
+  std::size_t z = 0;  // the layer the last cut is below
   for (int b = 1; b < blocks; ++b) {
-    const auto target = static_cast<std::size_t>(static_cast<std::int64_t>(n) * b / blocks);
-    while (z < static_cast<std::size_t>(dims[2]) && grid.cell_begin((z + 1) * layer) <= target) ++z;
-    if (z >= static_cast<std::size_t>(dims[2])) break;
-    // the nearer of the layer boundaries below and above the target
-    std::size_t cut = grid.cell_begin(z * layer);
-    if (z + 1 < static_cast<std::size_t>(dims[2]) &&
-        grid.cell_begin((z + 1) * layer) - target < target - cut)
-      cut = grid.cell_begin(++z * layer);
+    const auto target = static_cast<std::int64_t>(n) * b / blocks;
+    // the layer boundary above the last cut nearest to the target (they do not decrease)
+    std::size_t nearest = 0;
+    std::int64_t nearest_gap = std::numeric_limits<std::int64_t>::max();
+    for (std::size_t k = z + 1; k < layers_total; ++k) {
+      const auto boundary = static_cast<std::int64_t>(grid.cell_begin(k * layer));
+      if (std::abs(boundary - target) < nearest_gap) {
+        nearest_gap = std::abs(boundary - target);
+        nearest = k;
+      }
+      if (boundary > target) break;
+    }
+    if (nearest == 0) break;
+    const std::size_t cut = grid.cell_begin(nearest * layer);
     if (cut > static_cast<std::size_t>(starts.back()) && cut < static_cast<std::size_t>(n)) {
+      z = nearest;
       starts.push_back(static_cast<int>(cut));
       // the points of the layers [z - w, z + w), within the grid
       auto layers = [&](std::size_t w) {
         const std::size_t lo = z >= w ? z - w : 0;
-        const std::size_t hi = std::min<std::size_t>(z + w, static_cast<std::size_t>(dims[2]));
+        const std::size_t hi = std::min(z + w, layers_total);
         return std::pair(static_cast<int>(grid.cell_begin(lo * layer)),
                          static_cast<int>(grid.cell_begin(hi * layer)));
       };
       g.cuts.push_back(layers(1));
       g.near_cuts.push_back(layers(2));
     }
-    ++z;
   }
   starts.push_back(n);
   return g;

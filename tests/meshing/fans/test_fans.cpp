@@ -28,20 +28,23 @@ void expect_correct(const MeshCheckReport& r) {
   EXPECT_EQ(r.topology.inconsistent_edges, 0u) << "orientation must be consistent";
 }
 
+// A closed genus-0 triangulation of all `points` points: F = 2V - 4.
+void expect_closed_sphere(const MeshCheckReport& r, std::size_t points) {
+  SCOPED_TRACE(r.to_text());
+  expect_correct(r);
+  EXPECT_EQ(r.topology.boundary_loops, 0u);
+  EXPECT_EQ(r.topology.euler_characteristic, 2);
+  EXPECT_EQ(r.nonmanifold_vertices, 0u);
+  EXPECT_EQ(r.faces, 2 * points - 4);
+}
+
 class RandomSphere : public ::testing::TestWithParam<int> {};
 
 TEST_P(RandomSphere, IsClosedCorrectAndComplete) {
   const auto pts = test::random_sphere(static_cast<std::size_t>(GetParam()), 2002);
   const FanResult res = build_fans(pts);
   ASSERT_EQ(res.mesh.positions.size(), pts.size());
-  const MeshCheckReport r = check_mesh(res.mesh);
-  SCOPED_TRACE(r.to_text());
-  expect_correct(r);
-  EXPECT_EQ(r.topology.boundary_loops, 0u);
-  EXPECT_EQ(r.topology.euler_characteristic, 2);
-  EXPECT_EQ(r.nonmanifold_vertices, 0u);
-  // closed genus-0 triangulation: F = 2V - 4
-  EXPECT_EQ(r.faces, 2 * pts.size() - 4);
+  expect_closed_sphere(check_mesh(res.mesh), pts.size());
 }
 
 INSTANTIATE_TEST_SUITE_P(Fans, RandomSphere, ::testing::Values(5000, 10000, 40000));
@@ -56,12 +59,7 @@ TEST(FansGrowthInBlocks, SphereGrownInBlocksIsClosedCorrectAndComplete) {
   EXPECT_GE(res.stats.growth_blocks, 3u);
   EXPECT_EQ(res.stats.growth_blocks_discarded, 0u);
   const MeshCheckReport r = check_mesh(res.mesh);
-  SCOPED_TRACE(r.to_text());
-  expect_correct(r);
-  EXPECT_EQ(r.topology.boundary_loops, 0u);
-  EXPECT_EQ(r.topology.euler_characteristic, 2);
-  EXPECT_EQ(r.nonmanifold_vertices, 0u);
-  EXPECT_EQ(r.faces, 2 * pts.size() - 4);
+  expect_closed_sphere(r, pts.size());
   // the same share of well-shaped triangles as one growth, within a tenth of a point
   const MeshCheckReport one = check_mesh(build_fans(pts).mesh);
   EXPECT_NEAR(r.fraction_min_angle_ge_30, one.fraction_min_angle_ge_30, 0.001);

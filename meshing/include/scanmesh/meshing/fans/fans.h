@@ -42,10 +42,10 @@ struct FanOptions {
   bool orient_away_from_axis = false;
   std::uint64_t seed = 1;  //!< picks the start point of the normal orientation (determinism)
   int threads = 0;         //!< OpenMP threads; 0: default. Output does not depend on it.
-  //! Opt-in: the surface growth runs in parallel blocks of about this many points, slabs of
-  //! space joined across their borders afterwards; 0 (default): one growth for the whole cloud.
-  //! Faster on large clouds (1M-point sphere 3.7 -> 3.2 s on 2 cores); on noisy clouds the
-  //! joins can leave extra holes (docs/fans.md, "Growth in blocks").
+  //! The surface growth runs in parallel blocks of about this many points (slabs of space, grown
+  //! again as one across their cuts) on clouds of at least twice as many; kept only where the
+  //! fronts closed at every cut, else the growth runs again as one (docs/fans.md, "Growth in
+  //! blocks"). 0: one growth for every cloud.
   std::size_t growth_block_points = 250000;
   //! More threads than this are refused: each costs a stack and per-thread buffers, and no
   //! machine this runs on has more cores.
