@@ -104,6 +104,27 @@ Vector3d pca_normal(const std::vector<Vector3d>& pts, int c,
   return es.eigenvectors().col(0).normalized();
 }
 
+// An allocator whose new elements are left default-initialised (for numbers: unwritten), for
+// arrays that a parallel loop then fills in full.
+template <class T>
+struct NoInit : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = NoInit<U>;
+  };
+  NoInit() = default;
+  template <class U>
+  NoInit(const NoInit<U>&) {}
+  template <class U>
+  void construct(U* p) {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+
 struct Context {
   const std::vector<Vector3d>& pts;
   const FanOptions& opt;
@@ -112,9 +133,9 @@ struct Context {
   double d_max = 0;
   std::vector<Vector3d> normals;
   std::vector<Vector3d> pca;  // PCA normal of every point (orientation reference)
-  std::vector<std::uint8_t> is_pca;
-  std::vector<int> knn;  // kNormalNeighbours per point, -1 padded
-  std::vector<double> spacing;
+  std::vector<std::uint8_t, NoInit<std::uint8_t>> is_pca;
+  std::vector<int, NoInit<int>> knn;  // kNormalNeighbours per point, -1 padded
+  std::vector<double, NoInit<double>> spacing;
   // `g`: a grid over p.
   Context(const std::vector<Vector3d>& p, const FanOptions& o, PointGrid&& g)
       : pts(p), opt(o), grid(std::move(g)) {}
@@ -151,11 +172,13 @@ int omp_threads(const FanOptions& o) { return o.threads > 0 ? o.threads : omp_ge
 void compute_normals(Context& ctx, const std::vector<Eigen::Vector3f>* given) {
   const auto& pts = ctx.pts;
   const int n = static_cast<int>(pts.size());
-  ctx.normals.assign(n, Vector3d::UnitZ());
-  ctx.pca.assign(n, Vector3d::UnitZ());
-  ctx.is_pca.assign(n, 0);
-  ctx.knn.assign(static_cast<std::size_t>(n) * kNormalNeighbours, -1);
-  ctx.spacing.assign(n, 0.0);
+  // Sized without being written (Eigen's vectors and NoInit arrays stay uninitialised): the
+  // loop writes every entry, and so touches the pages first in parallel.
+  ctx.normals.resize(n);
+  ctx.pca.resize(n);
+  ctx.is_pca.resize(n);
+  ctx.knn.resize(static_cast<std::size_t>(n) * kNormalNeighbours);
+  ctx.spacing.resize(n);
 #pragma omp parallel num_threads(omp_threads(ctx.opt))
   {
     std::vector<std::pair<double, int>> nn;
@@ -163,10 +186,13 @@ void compute_normals(Context& ctx, const std::vector<Eigen::Vector3f>* given) {
     for (int o = 0; o < n; ++o) {
       const int c = ctx.grid.order()[o];  // cell order: neighbours are in cache
       ctx.grid.knn(c, kNormalNeighbours, nn);
-      for (std::size_t k = 0; k < nn.size(); ++k) ctx.knn[c * kNormalNeighbours + k] = nn[k].second;
+      for (std::size_t k = 0; k < kNormalNeighbours; ++k)
+        ctx.knn[c * kNormalNeighbours + k] = k < nn.size() ? nn[k].second : -1;
       ctx.spacing[c] = nn.empty() ? 0.0 : std::sqrt(nn[0].first);
       const Vector3d pca = nn.size() >= 2 ? pca_normal(pts, c, nn) : Vector3d::UnitZ();
       ctx.pca[c] = pca;
+      ctx.normals[c] = Vector3d::UnitZ();
+      ctx.is_pca[c] = 0;
       bool use_pca = ctx.opt.pca_normals || nn.size() < 3;
       if (!use_pca) {
         const Vector3d& q1 = pts[nn[0].second];
@@ -483,6 +509,20 @@ class FanBuilder {
   bool circles_fresh_ = false, filter_ = false;
 };
 
+// An allocator that leaves new elements unconstructed: their owner constructs them itself.
+template <class T>
+struct Unconstructed : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = Unconstructed<U>;
+  };
+  Unconstructed() = default;
+  template <class U>
+  Unconstructed(const Unconstructed<U>&) {}
+  template <class U>
+  void construct(U*) {}
+};
+
 // One face at a vertex v: the face and its two other corners in face order (v, next, prev).
 // Keeping the corners here answers every edge query at v (does v -> w exist? which face?)
 // without looking up the faces themselves.
@@ -540,12 +580,18 @@ class FaceStar {
 // corners (the radar sweep's visibility condition, 7a, checked per triangle).
 class Assembly {
  public:
-  Assembly(const std::vector<Vector3d>& pts, double eps_area)
-      : pts_(pts), others_around_(pts.size(), 0), star_(pts.size()), eps_area_(eps_area) {}
+  Assembly(const std::vector<Vector3d>& pts, double eps_area, int threads)
+      : pts_(pts), others_around_(pts.size(), 0), eps_area_(eps_area) {
+    // A million stars are 136 MB: constructed in parallel, so both threads fault in the pages.
+    star_.resize(pts.size());
+    const auto n = static_cast<std::ptrdiff_t>(pts.size());
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (std::ptrdiff_t v = 0; v < n; ++v) ::new (static_cast<void*>(&star_[v])) FaceStar();
+  }
 
   const std::vector<std::array<int, 3>>& faces() const { return faces_; }
   const std::vector<std::uint8_t>& alive() const { return alive_; }
-  const std::vector<FaceStar>& star() const { return star_; }
+  const std::vector<FaceStar, Unconstructed<FaceStar>>& star() const { return star_; }
 
   bool directed_edge_used(int u, int v) const { return corner_with(u, v) != nullptr; }
   bool edge_exists(int u, int v) const {
@@ -766,7 +812,7 @@ class Assembly {
   // Per vertex: faces around it that are not consensus faces (kept up to date, so the
   // consensus test reads three counters instead of every face around the corners).
   std::vector<int> others_around_;
-  std::vector<FaceStar> star_;
+  std::vector<FaceStar, Unconstructed<FaceStar>> star_;
   double eps_area_;
 };
 
@@ -1125,19 +1171,20 @@ std::size_t flip_to_delaunay(Assembly& as, const std::vector<Vector3d>& pts, int
   // Read-only pass in parallel: only faces with a non-Delaunay edge, and faces next to a flip,
   // can flip (any other face would pass every test below unchanged). The test is symmetric in
   // the two faces, so each interior edge is tested once, from the side a < b, and marks both.
+  // The edges a -> b are read from the stars of a in point order: the points are in cell
+  // order, so b's star and the corners' positions are near in memory (face order was not).
   const std::size_t faces = as.faces().size();
+  const auto n = static_cast<std::ptrdiff_t>(pts.size());
   std::vector<std::uint8_t> suspect(faces, 0);
   auto mark = [&](std::size_t f) { std::atomic_ref(suspect[f]).store(1, std::memory_order_relaxed); };
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 4096)
-  for (std::ptrdiff_t f = 0; f < static_cast<std::ptrdiff_t>(faces); ++f) {
-    if (!as.alive()[f]) continue;
-    const auto& t = as.faces()[f];
-    for (int k = 0; k < 3; ++k) {
-      const int a = t[k], b = t[(k + 1) % 3], c = t[(k + 2) % 3];
+  for (std::ptrdiff_t a = 0; a < n; ++a) {
+    for (const Corner& corner : as.star()[a]) {
+      const int b = corner.next, c = corner.prev;
       if (a > b) continue;
-      const Corner* across = as.corner_with(b, a);
-      if (!across || delaunay_across(a, b, c, across->prev)) continue;
-      mark(static_cast<std::size_t>(f));
+      const Corner* across = as.corner_with(b, static_cast<int>(a));
+      if (!across || delaunay_across(static_cast<int>(a), b, c, across->prev)) continue;
+      mark(static_cast<std::size_t>(corner.face));
       mark(static_cast<std::size_t>(across->face));
     }
   }
@@ -1817,9 +1864,9 @@ void write_mesh(const Assembly& as, const std::vector<Vector3d>& input,
   for (std::ptrdiff_t f = 0; f < nf; ++f) {
     const auto& t = faces[f];
     mesh.triangles[f] = {perm[t[0]], perm[t[1]], perm[t[2]]};
-    const auto& q = mesh.triangles[f];
-    signed_volume[f] = input[q[0]].dot(input[q[1]].cross(input[q[2]]));
-    doubled_area[f] = (input[q[1]] - input[q[0]]).cross(input[q[2]] - input[q[0]]).norm();
+    // the same coordinates as input[perm[..]], near in memory
+    signed_volume[f] = points[t[0]].dot(points[t[1]].cross(points[t[2]]));
+    doubled_area[f] = (points[t[1]] - points[t[0]]).cross(points[t[2]] - points[t[0]]).norm();
   }
   // Without given normals the oriented estimates may point inwards as a whole: turn
   // everything round if the enclosed volume is negative (meaningful on a closed surface).
@@ -1876,7 +1923,7 @@ FanResult build_fans_distinct(const std::vector<Vector3d>& input, const FanOptio
   t0 = std::chrono::steady_clock::now();
   const std::vector<std::array<int, 4>> proposals = vote_triangles(fans, options);
   st.proposed_triangles = proposals.size();
-  Assembly as(points, 1e-9);
+  Assembly as(points, 1e-9, omp_threads(options));
   fans.clear();
   fans.shrink_to_fit();
   grow_surface(as, ctx, proposals, st);
