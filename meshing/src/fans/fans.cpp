@@ -848,17 +848,20 @@ class SurfaceGrowth {
   static constexpr int kGlueVotes = 2;
 
  public:
-  //! Grows over the vertices [first, end) with the candidates not yet `used` whose corners all
-  //! lie there. `slots`: the growth fills the faces from reserve_faces(slots.size) (one block
-  //! of a parallel growth; each face uses up a candidate, so the block's candidates bound its
-  //! faces); without, it appends.
+  //! Grows over the vertices [first, end) with the candidates `mine` (indices into `cands`, in
+  //! order, not yet `used`, their corners all in the range; chosen before a parallel growth
+  //! starts, since its blocks write `used`). `slots`: the growth fills the faces from
+  //! reserve_faces(slots.size) (one block of a parallel growth; each face uses up a candidate,
+  //! so the block's candidates bound its faces); without, it appends.
   SurfaceGrowth(Assembly& as, const std::vector<Vector3d>& pts,
                 const std::vector<std::array<int, 4>>& cands, std::vector<std::uint8_t>& used,
-                int first, int end, FaceSlots slots = {}, std::vector<int>* candidate_of = nullptr)
+                std::vector<int> mine, int first, int end, FaceSlots slots = {},
+                std::vector<int>* candidate_of = nullptr)
       : as_(as),
         pts_(pts),
         cands_(cands),
         used_(used),
+        mine_(std::move(mine)),
         candidate_of_(candidate_of),
         first_(first),
         start_(static_cast<std::size_t>(end - first) + 1, 0),
@@ -866,13 +869,6 @@ class SurfaceGrowth {
         next_slot_(slots.first),
         slots_end_(slots.first + static_cast<int>(slots.size)),
         first_face_(slots.first < 0 ? 0 : slots.first) {
-    const auto inside = [&](int v) { return v >= first && v < end; };
-    for (std::size_t i = 0; i < cands.size(); ++i) {
-      const auto& c = cands[i];
-      // corners first: the other blocks' growths are writing their candidates' flags
-      if (inside(c[0]) && inside(c[1]) && inside(c[2]) && !used[i])
-        mine_.push_back(static_cast<int>(i));
-    }
     for (int i : mine_)
       for (int k = 0; k < 3; ++k) ++start_[cands[i][k] - first + 1];
     for (std::size_t v = 0; v + 1 < start_.size(); ++v) start_[v + 1] += start_[v];
@@ -1083,8 +1079,8 @@ class SurfaceGrowth {
   const std::vector<Vector3d>& pts_;
   const std::vector<std::array<int, 4>>& cands_;
   std::vector<std::uint8_t>& used_;  // shared by a parallel growth's blocks: disjoint entries
-  std::vector<int>* candidate_of_;   // when given: the candidate of each face made
   std::vector<int> mine_;            // this growth's candidates, in their order
+  std::vector<int>* candidate_of_;   // when given: the candidate of each face made
   int first_;                        // its first vertex: the per-vertex arrays start there
   // A candidate as seen from one of its corners, with the other two corners in place: the
   // growth scans a vertex's candidates for every boundary edge, and reading them from the
@@ -1732,6 +1728,14 @@ GrowthBlocks growth_blocks(const PointGrid& grid, int n, std::size_t per_block) 
   return g;
 }
 
+// The candidates not yet used, in order.
+std::vector<int> unused_candidates(const std::vector<std::uint8_t>& used) {
+  std::vector<int> unused;
+  for (std::size_t i = 0; i < used.size(); ++i)
+    if (!used[i]) unused.push_back(static_cast<int>(i));
+  return unused;
+}
+
 // Hole closing as the options ask (close_holes).
 std::size_t close_small_holes(Assembly& as, const Context& ctx) {
   if (ctx.opt.max_hole_edges < 3) return 0;
@@ -1766,18 +1770,20 @@ bool grow_in_blocks(Assembly& as, const Context& ctx,
   auto block_of = [&](int v) {
     return static_cast<int>(std::upper_bound(starts.begin(), starts.end(), v) - starts.begin()) - 1;
   };
-  std::vector<std::size_t> inside(blocks, 0);  // candidates with all corners in the block
-  for (const auto& c : proposals) {
+  std::vector<std::vector<int>> inside(blocks);  // candidates with all corners in the block
+  for (std::size_t i = 0; i < proposals.size(); ++i) {
+    const auto& c = proposals[i];
     const int b = block_of(c[0]);
-    if (block_of(c[1]) == b && block_of(c[2]) == b) ++inside[b];
+    if (block_of(c[1]) == b && block_of(c[2]) == b) inside[b].push_back(static_cast<int>(i));
   }
   std::vector<FaceSlots> slots(blocks);
-  for (int b = 0; b < blocks; ++b) slots[b] = {as.reserve_faces(inside[b]), inside[b]};
+  for (int b = 0; b < blocks; ++b) slots[b] = {as.reserve_faces(inside[b].size()), inside[b].size()};
   std::vector<GrowthCounts> block_counts(blocks);
   std::vector<int> candidate_of(as.faces().size(), -1);
 #pragma omp parallel for num_threads(omp_threads(ctx.opt)) schedule(dynamic, 1)
   for (int b = 0; b < blocks; ++b) {
-    SurfaceGrowth g(as, points, proposals, used, starts[b], starts[b + 1], slots[b], &candidate_of);
+    SurfaceGrowth g(as, points, proposals, used, std::move(inside[b]), starts[b], starts[b + 1],
+                    slots[b], &candidate_of);
     g.grow();
     block_counts[b].add(g);
   }
@@ -1799,7 +1805,8 @@ bool grow_in_blocks(Assembly& as, const Context& ctx,
     as.remove(static_cast<int>(f));
     used[candidate_of[f]] = 0;
   }
-  SurfaceGrowth across(as, points, proposals, used, 0, static_cast<int>(points.size()));
+  SurfaceGrowth across(as, points, proposals, used, unused_candidates(used), 0,
+                       static_cast<int>(points.size()));
   across.resume();
   counts.add(across);
   counts.hole_triangles = close_small_holes(as, ctx);
@@ -1829,7 +1836,7 @@ void grow_surface(Assembly& as, const Context& ctx,
       st.growth_blocks = 1;
       st.growth_blocks_discarded = split.starts.size() - 1;
     }
-    SurfaceGrowth g(as, ctx.pts, proposals, used, 0, n);
+    SurfaceGrowth g(as, ctx.pts, proposals, used, unused_candidates(used), 0, n);
     g.grow();
     counts.add(g);
     counts.hole_triangles = close_small_holes(as, ctx);
