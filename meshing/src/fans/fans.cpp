@@ -104,26 +104,6 @@ Vector3d pca_normal(const std::vector<Vector3d>& pts, int c,
   return es.eigenvectors().col(0).normalized();
 }
 
-// An allocator whose new elements are left default-initialised (for numbers: unwritten), for
-// arrays that a parallel loop then fills in full.
-template <class T>
-struct NoInit : std::allocator<T> {
-  template <class U>
-  struct rebind {
-    using other = NoInit<U>;
-  };
-  NoInit() = default;
-  template <class U>
-  NoInit(const NoInit<U>&) {}
-  template <class U>
-  void construct(U* p) {
-    ::new (static_cast<void*>(p)) U;
-  }
-  template <class U, class... Args>
-  void construct(U* p, Args&&... args) {
-    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
-  }
-};
 
 struct Context {
   const std::vector<Vector3d>& pts;
@@ -133,9 +113,9 @@ struct Context {
   double d_max = 0;
   std::vector<Vector3d> normals;
   std::vector<Vector3d> pca;  // PCA normal of every point (orientation reference)
-  std::vector<std::uint8_t, NoInit<std::uint8_t>> is_pca;
-  std::vector<int, NoInit<int>> knn;  // kNormalNeighbours per point, -1 padded
-  std::vector<double, NoInit<double>> spacing;
+  std::vector<std::uint8_t> is_pca;
+  std::vector<int> knn;  // kNormalNeighbours per point, -1 padded
+  std::vector<double> spacing;
   // `g`: a grid over p.
   Context(const std::vector<Vector3d>& p, const FanOptions& o, PointGrid&& g)
       : pts(p), opt(o), grid(std::move(g)) {}
@@ -172,13 +152,11 @@ int omp_threads(const FanOptions& o) { return o.threads > 0 ? o.threads : omp_ge
 void compute_normals(Context& ctx, const std::vector<Eigen::Vector3f>* given) {
   const auto& pts = ctx.pts;
   const int n = static_cast<int>(pts.size());
-  // Sized without being written (Eigen's vectors and NoInit arrays stay uninitialised): the
-  // loop writes every entry, and so touches the pages first in parallel.
-  ctx.normals.resize(n);
-  ctx.pca.resize(n);
-  ctx.is_pca.resize(n);
-  ctx.knn.resize(static_cast<std::size_t>(n) * kNormalNeighbours);
-  ctx.spacing.resize(n);
+  ctx.normals.assign(n, Vector3d::UnitZ());
+  ctx.pca.assign(n, Vector3d::UnitZ());
+  ctx.is_pca.assign(n, 0);
+  ctx.knn.assign(static_cast<std::size_t>(n) * kNormalNeighbours, -1);
+  ctx.spacing.assign(n, 0.0);
 #pragma omp parallel num_threads(omp_threads(ctx.opt))
   {
     std::vector<std::pair<double, int>> nn;
@@ -186,13 +164,10 @@ void compute_normals(Context& ctx, const std::vector<Eigen::Vector3f>* given) {
     for (int o = 0; o < n; ++o) {
       const int c = ctx.grid.order()[o];  // cell order: neighbours are in cache
       ctx.grid.knn(c, kNormalNeighbours, nn);
-      for (std::size_t k = 0; k < kNormalNeighbours; ++k)
-        ctx.knn[c * kNormalNeighbours + k] = k < nn.size() ? nn[k].second : -1;
+      for (std::size_t k = 0; k < nn.size(); ++k) ctx.knn[c * kNormalNeighbours + k] = nn[k].second;
       ctx.spacing[c] = nn.empty() ? 0.0 : std::sqrt(nn[0].first);
       const Vector3d pca = nn.size() >= 2 ? pca_normal(pts, c, nn) : Vector3d::UnitZ();
       ctx.pca[c] = pca;
-      ctx.normals[c] = Vector3d::UnitZ();
-      ctx.is_pca[c] = 0;
       bool use_pca = ctx.opt.pca_normals || nn.size() < 3;
       if (!use_pca) {
         const Vector3d& q1 = pts[nn[0].second];
@@ -812,6 +787,8 @@ class Assembly {
   // Per vertex: faces around it that are not consensus faces (kept up to date, so the
   // consensus test reads three counters instead of every face around the corners).
   std::vector<int> others_around_;
+  // Constructed by the constructor itself: star_ must never grow after it (a new element would
+  // stay unconstructed).
   std::vector<FaceStar, Unconstructed<FaceStar>> star_;
   double eps_area_;
 };
