@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "../kernel/cell_lists.h"
+#include "../kernel/segment.h"
 #include "scanmesh/meshing/aft/animesh.h"
 #include "scanmesh/meshing/edge_key.h"
 #include "scanmesh/reconstruction/scan_surface.h"
@@ -93,18 +94,8 @@ inline double min_angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
   return lb <= lc ? angle_at(b, c, a) : angle_at(c, a, b);
 }
 
-//! The place t in [0, 1] of the point of segment a-b closest to p (2D or 3D; 0 if a = b).
-template <typename Vector>
-double closest_segment_parameter(const Vector& p, const Vector& a, const Vector& b) {
-  const Vector ab = b - a;
-  return ab.squaredNorm() > 0 ? std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
-}
-//! Distance from p to the segment a-b (2D or 3D).
-template <typename Vector>
-double point_segment_distance(const Vector& p, const Vector& a, const Vector& b) {
-  const double t = closest_segment_parameter(p, a, b);
-  return (a + t * (b - a) - p).norm();
-}
+using kernel::closest_segment_parameter;
+using kernel::point_segment_distance;
 
 using kernel::cell_key;
 using kernel::pack_cell;

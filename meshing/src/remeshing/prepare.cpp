@@ -10,6 +10,7 @@
 #include <unordered_map>
 
 #include "../kernel/cell_lists.h"
+#include "../kernel/segment.h"
 #include "../kernel/vertex_components.h"
 #include "hole_filling.h"
 #include "scanmesh/meshing/kernel/triangle_mesh.h"
@@ -379,9 +380,8 @@ std::size_t remove_necks(Surface& s, double max_width, double reach) {
           for (int e : *list) {
             const int a = border[e][0], b = border[e][1];
             if (a == c || b == c) continue;
-            const Vec3 ab = s.pos[b] - s.pos[a];
-            const double u = std::clamp((p - s.pos[a]).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
-            const Vec3 across = s.pos[a] + u * ab - p;
+            const double u = kernel::closest_segment_parameter(p, s.pos[a], s.pos[b]);
+            const Vec3 across = s.pos[a] + u * (s.pos[b] - s.pos[a]) - p;
             if (across.norm() >= max_width || across.dot(inward) <= 0) continue;
             if (along_border(c, a) || along_border(c, b)) continue;
             neck = true;
