@@ -123,9 +123,8 @@ int main(int argc, char** argv) {
       const double t = times[1];
       const MeshCheckReport r = check_mesh(res.mesh, {.self_intersections = false});
       std::printf(
-          "\nrandom sphere %zu points, %d thread(s), growth in %zu block(s) (%zu discarded): %.2f "
-          "s "
-          "median of 3, first run %.2f s "
+          "\nrandom sphere %zu points, %d thread(s), growth in %zu block(s) (%zu discarded): "
+          "%.2f s median of 3, first run %.2f s "
           "(last run: normals %.2f, fans %.2f, assembly %.2f), %.0f points/s, %zu triangles, "
           "non-manifold edges %zu, boundary loops %zu, unused %zu, Euler %lld\n",
           big.size(), threads, res.stats.growth_blocks, res.stats.growth_blocks_discarded, t, first,

@@ -104,7 +104,6 @@ Vector3d pca_normal(const std::vector<Vector3d>& pts, int c,
   return es.eigenvectors().col(0).normalized();
 }
 
-
 struct Context {
   const std::vector<Vector3d>& pts;
   const FanOptions& opt;
@@ -690,7 +689,7 @@ class Assembly {
   }
 
   void add(const std::array<int, 3>& t, bool consensus = false, int slot = -1) {
-    const int f = slot < 0 ? static_cast<int>(faces_.size()) : slot;
+    const int f = slot < 0 ? reserve_faces(1) : slot;
     std::uint8_t open = 0;
     for (int k = 0; k < 3; ++k) {
       if (const Corner* across = corner_with(t[(k + 1) % 3], t[k]))
@@ -698,17 +697,10 @@ class Assembly {
       else
         open |= static_cast<std::uint8_t>(1 << k);
     }
-    if (slot < 0) {
-      faces_.push_back(t);
-      alive_.push_back(1);
-      consensus_.push_back(consensus ? 1 : 0);
-      open_.push_back(open);
-    } else {
-      faces_[f] = t;
-      alive_[f] = 1;
-      consensus_[f] = consensus ? 1 : 0;
-      open_[f] = open;
-    }
+    faces_[f] = t;
+    alive_[f] = 1;
+    consensus_[f] = consensus ? 1 : 0;
+    open_[f] = open;
     for (int k = 0; k < 3; ++k) {
       star_[t[k]].push_back({f, t[(k + 1) % 3], t[(k + 2) % 3]});
       if (!consensus) ++others_around_[t[k]];
@@ -1481,9 +1473,8 @@ void check_input(const std::vector<Vector3d>& points, const FanOptions& options)
     if (!p.allFinite()) throw InvalidInputError("build_fans: a point has a non-finite coordinate");
 }
 
-// The points in cell order, so that neighbours are close in memory (the fans touch the
-// positions and normals of all neighbours; in input order that is a cache miss each), and the
-// grid over them.
+// The points in the grid's cell order, so that neighbours are close in memory (the fans touch
+// the positions and normals of all neighbours; in input order that is a cache miss each).
 struct SortedPoints {
   std::vector<int> perm;  // sorted index -> input index
   std::vector<Vector3d> points;
@@ -1729,6 +1720,13 @@ struct GrowthCounts {
     glued += g.glued();
     unzipped += g.unzipped();
   }
+  GrowthCounts& operator+=(const GrowthCounts& o) {
+    seeds += o.seeds;
+    glued += o.glued;
+    unzipped += o.unzipped;
+    hole_triangles += o.hole_triangles;
+    return *this;
+  }
 };
 
 // The surface growth in blocks of consecutive points: points are in cell order, so a block is a
@@ -1764,11 +1762,7 @@ bool grow_in_blocks(Assembly& as, const Context& ctx,
     g.grow();
     block_counts[b].add(g);
   }
-  for (const auto& c : block_counts) {
-    counts.seeds += c.seeds;
-    counts.glued += c.glued;
-    counts.unzipped += c.unzipped;
-  }
+  for (const auto& c : block_counts) counts += c;
   auto within = [](const std::vector<std::pair<int, int>>& ranges, int v) {
     for (const auto& [first, end] : ranges)
       if (v >= first && v < end) return true;

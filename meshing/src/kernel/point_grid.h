@@ -68,14 +68,13 @@ class PointGrid {
   PointGrid(const std::vector<Eigen::Vector3d>& points, double cell_edge,
             const std::pair<Eigen::Vector3d, Eigen::Vector3d>& box)
       : points_(points), lo_(box.first), hi_(box.second) {
-    const Eigen::Vector3d& hi = hi_;
     cell_ = cell_edge;
     const double limit = 8.0 * static_cast<double>(points.size()) + 64.0;
     while (true) {
       double cells = 1.0;  // in double: the int dimensions are formed only once they fit
       std::array<double, 3> extent{};
       for (int a = 0; a < 3; ++a) {
-        extent[a] = std::floor((hi[a] - lo_[a]) / cell_) + 1.0;
+        extent[a] = std::floor((hi_[a] - lo_[a]) / cell_) + 1.0;
         cells *= extent[a];
       }
       if (cells <= limit) {
