@@ -98,6 +98,7 @@ using kernel::closest_segment_parameter;
 using kernel::point_segment_distance;
 
 using kernel::cell_key;
+using kernel::cell_of;
 using kernel::pack_cell;
 
 //! The map from a tangent displacement at a surface point to the (phi, h) step that makes it,

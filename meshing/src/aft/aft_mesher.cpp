@@ -434,8 +434,8 @@ class Mesher {
     // The cells that the box f.M +- reach overlaps: an edge of the search has its midpoint
     // within `reach` of f.M. (3-4 cells per axis; the cube of +-ceil(reach / cell_) cells
     // around f.M's cell, 5 per axis, looked up twice as many, nearly all of them empty.)
-    const std::array<std::int64_t, 3> lo = kernel::cell_of(f.M - Vector3d::Constant(reach), cell_),
-                                      hi = kernel::cell_of(f.M + Vector3d::Constant(reach), cell_);
+    const std::array<std::int64_t, 3> lo = cell_of(f.M - Vector3d::Constant(reach), cell_),
+                                      hi = cell_of(f.M + Vector3d::Constant(reach), cell_);
     std::array<std::int64_t, 3> count;
     for (int k = 0; k < 3; ++k) count[k] = hi[k] - lo[k] + 1;
     seen_.lo = lo;
@@ -676,7 +676,7 @@ class Mesher {
   }
   bool side_in(const Seen& s, int a, int b) {
     // The cell of the edge's midpoint, as cell_key files the edge.
-    const auto c = kernel::cell_of(0.5 * (N_.pos[a] + N_.pos[b]), cell_);
+    const auto c = cell_of(0.5 * (N_.pos[a] + N_.pos[b]), cell_);
     bool in_box = true;
     for (int k = 0; k < 3; ++k) in_box = in_box && c[k] >= s.lo[k] && c[k] < s.lo[k] + s.count[k];
     if (in_box) return true;

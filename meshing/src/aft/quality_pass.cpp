@@ -187,6 +187,14 @@ class Repair {
     std::vector<Moved> moved;
     TriangleCells::Undo cells;  // the candidate's filings in grid_
     std::size_t n_tris = 0, n_verts = 0;
+    // Emptied, keeping the arrays' memory for the next candidate.
+    void clear() {
+      operations.clear();
+      moved.clear();
+      cells.keys.clear();
+      cells.filed.clear();
+      n_tris = n_verts = 0;
+    }
   };
 
   // Calls visit(t) for each triangle an operation changed, added or removed (no list built:
@@ -256,17 +264,20 @@ class Repair {
     return true;
   }
   void begin() {
-    journal_ = Journal{};
+    journal_.clear();
     journal_.n_tris = m_.tri.size();
     journal_.n_verts = S_.pos.size();
   }
   void rollback() {
-    std::vector<int> touched;  // corners of the triangles the operations changed or removed
+    auto& touched = touched_;  // corners of the triangles the operations changed or removed
+    touched.clear();
     for (auto it = journal_.operations.rbegin(); it != journal_.operations.rend(); ++it) {
       for_each_triangle(
           *it, [&](int t) { touched.insert(touched.end(), m_.tri[t].begin(), m_.tri[t].end()); });
       undo(*it);
     }
+    std::sort(touched.begin(), touched.end());
+    touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
     for (auto it = journal_.moved.rbegin(); it != journal_.moved.rend(); ++it)
       S_.restore(it->v, it->old);
     grid_.take_back(journal_.cells);
@@ -279,7 +290,7 @@ class Repair {
     // a kept operation had appended to comes back sorted all the same).
     for (int v : touched)
       if (v < static_cast<int>(m_.vfaces.size())) m_.sort_faces(v);
-    journal_ = Journal{};
+    journal_.clear();
   }
 
   // The triangle is counter-clockwise in the (phi, h) plane. The surface is a graph over it,
@@ -668,7 +679,7 @@ class Repair {
     }
     begin();
     apply(f, best_k);
-    journal_ = Journal{};
+    journal_.clear();
     ++st.operations[best_k / 3];
     return true;
   }
@@ -680,6 +691,7 @@ class Repair {
   const std::unordered_set<std::uint64_t>& C_;
   std::size_t fixed_;
   Journal journal_;
+  std::vector<int> touched_;  // rollback()'s corners, kept for its memory
   std::unordered_set<std::uint64_t> stuck_states_;  // optimise: star states that gave no move
   double deviation_goal_;                           // mm; 0: no deviation goal
   // The triangles, their labels and adjacency. Positions live in S_: m_.pos is the start's

@@ -11,7 +11,7 @@ TriangleCells::CellBox TriangleCells::cells_of(const std::array<int, 3>& f,
                                                std::span<const Eigen::Vector3d> P) const {
   CellBox box;
   for (int v : f) {
-    const auto c = kernel::cell_of(P[v], cell_);
+    const auto c = cell_of(P[v], cell_);
     box.extend(Eigen::Matrix<std::int64_t, 3, 1>(c[0], c[1], c[2]));
   }
   return box;

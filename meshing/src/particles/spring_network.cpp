@@ -1738,8 +1738,12 @@ bool closed_like(const TopologyStats& s, const TopologyStats& reference) {
          s.components == reference.components;
 }
 
-bool same_topology(const SpringNetwork& net, const TopologyStats& reference) {
-  return net.converged() && closed_like(topology_stats(net.mesh()), reference);
+// The network's mesh, when it converged closed like the reference.
+std::optional<Mesh> mesh_if_closed_like(const SpringNetwork& net, const TopologyStats& reference) {
+  if (!net.converged()) return std::nullopt;
+  Mesh mesh = net.mesh();
+  if (!closed_like(topology_stats(mesh), reference)) return std::nullopt;
+  return mesh;
 }
 
 // Every edge length of a closed mesh (each edge twice, once per face).
@@ -1799,7 +1803,7 @@ SpringNetwork layered_network(const ImplicitSurface& surface, const ParticleOpti
       coarse.density_tolerance = std::min(options.density_tolerance, 0.01);
       SpringNetwork again(relaxed, coarse);
       total += again.relax(surface);
-      if (same_topology(again, fine_stats)) start = subdivide(again.mesh(), surface);
+      if (const auto mesh = mesh_if_closed_like(again, fine_stats)) start = subdivide(*mesh, surface);
     }
   }
   SpringNetwork net(start, options);
@@ -1913,8 +1917,9 @@ std::vector<CoarseCandidate> coarse_candidates(const ImplicitSurface& surface,
   {
     SpringNetwork seed(source, coarse_level(options, 2.0 * R));
     *iterations += seed.relax(surface);
-    if (!same_topology(seed, fine_stats)) return out;
-    source = seed.mesh();
+    auto mesh = mesh_if_closed_like(seed, fine_stats);
+    if (!mesh) return out;
+    source = std::move(*mesh);
   }
   // The area from the seed subdivided once and projected (the marching-tetrahedra mesh's
   // chords miss ~1 % on a sphere at R / radius = 0.2; this is within ~0.1 %).
@@ -1932,10 +1937,10 @@ std::vector<CoarseCandidate> coarse_candidates(const ImplicitSurface& surface,
       *iterations += net.relax(surface, static_cast<std::size_t>(count));
       net.spread_evenly(surface, 200);
       *iterations += net.relax(surface, static_cast<std::size_t>(count));
-      if (!same_topology(net, fine_stats)) continue;
-      Mesh mesh = net.mesh();
-      const double score = handed_down_spread(mesh, n, wanted, chi);
-      out.push_back({score, n, std::move(mesh)});
+      auto mesh = mesh_if_closed_like(net, fine_stats);
+      if (!mesh) continue;
+      const double score = handed_down_spread(*mesh, n, wanted, chi);
+      out.push_back({score, n, std::move(*mesh)});
     }
   }
   std::sort(out.begin(), out.end(),
@@ -1989,7 +1994,7 @@ SpringNetwork relaxed_network(const ImplicitSurface& surface, const ParticleOpti
       last.max_iterations = std::min(options.max_iterations, 500);
       SpringNetwork net(subdivide_n(candidates[i].mesh, candidates[i].n, surface), last);
       total += net.relax(surface);
-      if (same_topology(net, fine_stats)) keep_if_better(std::move(net));
+      if (mesh_if_closed_like(net, fine_stats)) keep_if_better(std::move(net));
     }
   }
   if (!best || best_uniformity.first < options.subdivision_accept) {
