@@ -174,7 +174,8 @@ class PointGrid {
   }
 
   //! The K nearest other points of point i, nearest first, as (squared distance, index).
-  //! Ties are broken by index, so the result is deterministic.
+  //! Ties are broken by index, so the result is deterministic. The search stops at a radius of
+  //! a thousand times the grid's extent: a far outlier may get fewer than K (or none).
   void knn(int i, int K, std::vector<std::pair<double, int>>& out) const {
     const Eigen::Vector3d& c = points_[i];
     const std::size_t want = std::min<std::size_t>(K, points_.size() - 1);
@@ -185,10 +186,7 @@ class PointGrid {
     double r = cell_ * std::sqrt(static_cast<double>(K + 1) / (kPi * own));
     r = std::clamp(r * 1.15, 0.05 * cell_, 4.0 * cell_);
     while (true) {
-      out.clear();
-      visit_ball(c, r, [&](int j, double d2) {
-        if (j != i) out.emplace_back(d2, j);
-      });
+      collect_ball(i, r, out);
       if (out.size() >= want || r > 1e3 * cell_ * (dims_[0] + dims_[1] + dims_[2])) break;
       // Too few: grow by the missing share of the disc area (at least 1.3x, at most 2x).
       const double grow =
@@ -218,6 +216,30 @@ class PointGrid {
         dims_(other.dims_),
         start_(std::move(other.start_)),
         order_(std::move(other.order_)) {}
+
+  // (squared distance, index) of every point other than i within r of point i, in no
+  // particular order. Whole rows of cells (contiguous in order_) are scanned and every point
+  // is written, the count advancing only for those inside: the in-or-out branch, a coin toss
+  // for the points near the ball's surface, was most of a query's cost.
+  void collect_ball(int i, double r, std::vector<std::pair<double, int>>& out) const {
+    const Eigen::Vector3d& c = points_[i];
+    const auto a = coord(c - Eigen::Vector3d::Constant(r));
+    const auto b = coord(c + Eigen::Vector3d::Constant(r));
+    const double r2 = r * r;
+    std::size_t count = 0;
+    for (int z = a[2]; z <= b[2]; ++z)
+      for (int y = a[1]; y <= b[1]; ++y) {
+        const std::size_t first = start_[flat(a[0], y, z)], last = start_[flat(b[0], y, z) + 1];
+        if (out.size() < count + (last - first)) out.resize(count + (last - first));
+        for (std::size_t k = first; k < last; ++k) {
+          const int j = order_[k];
+          const double d2 = (points_[j] - c).squaredNorm();
+          out[count] = {d2, j};
+          count += static_cast<std::size_t>(d2 <= r2) & static_cast<std::size_t>(j != i);
+        }
+      }
+    out.resize(count);
+  }
 
   std::size_t points_in_cell_of(const Eigen::Vector3d& p) const {
     const auto c = coord(p);
