@@ -299,17 +299,17 @@ class FanBuilder {
         // of c-a), so a point the circle pre-test rejects now is rejected whenever its turn
         // comes: it is dropped here, before the sort, and the fan is the same.
         const bool prefilter = circle_pretest_active();
-        ctx_.grid.visit_ball(pts[c], d, [&](int j, double d2) {
-          if (j == c) return;
-          if (d2 > dp2 ||
-              (round == 1 && d2 <= r1_2 &&
-               std::find(first, first + kNormalNeighbours, j) == first + kNormalNeighbours)) {
-            Vector2d q;
-            if (prefilter && frame.rotate(pts[j] - pts[c], ctx_.eps_len, q) && surely_rejected(q))
-              return;
-            cand_.emplace_back(d2, j);
-          }
-        });
+        // Round 1 also takes the points tied with the 10th neighbour: all but the stored ones.
+        ctx_.grid.collect_shell(pts[c], round == 1 ? -1.0 : dp2, d, c, shell_);
+        for (const auto& [d2, j] : shell_) {
+          if (round == 1 && d2 <= r1_2 &&
+              std::find(first, first + kNormalNeighbours, j) != first + kNormalNeighbours)
+            continue;
+          Vector2d q;
+          if (prefilter && frame.rotate(pts[j] - pts[c], ctx_.eps_len, q) && surely_rejected(q))
+            continue;
+          cand_.emplace_back(d2, j);
+        }
       }
       ++round;
       std::sort(cand_.begin(), cand_.end());  // step 1: nearest first, ties by index
@@ -469,7 +469,7 @@ class FanBuilder {
 
   const Context& ctx_;
   std::vector<Spoke> fan_;
-  std::vector<std::pair<double, int>> cand_;
+  std::vector<std::pair<double, int>> cand_, shell_;
   // One per sector: a circle (centre in a, squared radius r2) or a wide sector's two spokes.
   struct SectorTest {
     bool wide;

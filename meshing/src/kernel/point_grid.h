@@ -173,6 +173,32 @@ class PointGrid {
     }
   }
 
+  //! (squared distance, index) of every point p other than `skip` with min_d2 < |p - c|^2 <=
+  //! r^2, in no particular order (visit_ball() as a list, for callers that filter further).
+  //! Whole rows of cells (contiguous in order_) are scanned and every point is written, the
+  //! count advancing only for those inside: the in-or-out branch, a coin toss for the points
+  //! near the ball's surface, was most of a k-nearest query's cost.
+  void collect_shell(const Eigen::Vector3d& c, double min_d2, double r, int skip,
+                     std::vector<std::pair<double, int>>& out) const {
+    const auto a = coord(c - Eigen::Vector3d::Constant(r));
+    const auto b = coord(c + Eigen::Vector3d::Constant(r));
+    const double r2 = r * r;
+    std::size_t count = 0;
+    for (int z = a[2]; z <= b[2]; ++z)
+      for (int y = a[1]; y <= b[1]; ++y) {
+        const std::size_t first = start_[flat(a[0], y, z)], last = start_[flat(b[0], y, z) + 1];
+        if (out.size() < count + (last - first)) out.resize(count + (last - first));
+        for (std::size_t k = first; k < last; ++k) {
+          const int j = order_[k];
+          const double d2 = (points_[j] - c).squaredNorm();
+          out[count] = {d2, j};
+          count += static_cast<std::size_t>(d2 <= r2) & static_cast<std::size_t>(d2 > min_d2) &
+                   static_cast<std::size_t>(j != skip);
+        }
+      }
+    out.resize(count);
+  }
+
   //! The K nearest other points of point i, nearest first, as (squared distance, index).
   //! Ties are broken by index, so the result is deterministic. The search stops at a radius of
   //! a thousand times the grid's extent: a far outlier may get fewer than K (or none).
@@ -186,7 +212,7 @@ class PointGrid {
     double r = cell_ * std::sqrt(static_cast<double>(K + 1) / (kPi * own));
     r = std::clamp(r * 1.15, 0.05 * cell_, 4.0 * cell_);
     while (true) {
-      collect_ball(i, r, out);
+      collect_shell(c, -1.0, r, i, out);
       if (out.size() >= want || r > 1e3 * cell_ * (dims_[0] + dims_[1] + dims_[2])) break;
       // Too few: grow by the missing share of the disc area (at least 1.3x, at most 2x).
       const double grow =
@@ -195,13 +221,20 @@ class PointGrid {
               : std::sqrt(static_cast<double>(want) / static_cast<double>(out.size())) * 1.15;
       r *= std::clamp(grow, 1.3, 2.0);
     }
-    // The K smallest (distance, index) pairs, sorted: a total order, so the same as a partial
-    // sort, and cheaper than its heap for the few dozen points one query finds.
+    // The K smallest (distance, index) pairs, sorted (a total order): insertion into the sorted
+    // front of `out`, which most of the few dozen points a query finds skip with one compare
+    // against the K-th (cheaper than nth_element and a sort of the front).
     const std::size_t keep = std::min(want, out.size());
-    if (keep < out.size())
-      std::nth_element(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(keep), out.end());
+    for (std::size_t t = 1; t < out.size(); ++t) {
+      const std::size_t end = std::min(t, keep);  // out[0, end) is sorted
+      if (end == keep && !(out[t] < out[keep - 1])) continue;
+      const auto e = out[t];
+      // A full front drops its last entry (K entries are below it); otherwise out[t] is next.
+      std::size_t pos = end == keep ? keep - 1 : t;
+      for (; pos > 0 && e < out[pos - 1]; --pos) out[pos] = out[pos - 1];
+      out[pos] = e;
+    }
     out.resize(keep);
-    std::sort(out.begin(), out.end());
   }
 
  private:
@@ -216,30 +249,6 @@ class PointGrid {
         dims_(other.dims_),
         start_(std::move(other.start_)),
         order_(std::move(other.order_)) {}
-
-  // (squared distance, index) of every point other than i within r of point i, in no
-  // particular order. Whole rows of cells (contiguous in order_) are scanned and every point
-  // is written, the count advancing only for those inside: the in-or-out branch, a coin toss
-  // for the points near the ball's surface, was most of a query's cost.
-  void collect_ball(int i, double r, std::vector<std::pair<double, int>>& out) const {
-    const Eigen::Vector3d& c = points_[i];
-    const auto a = coord(c - Eigen::Vector3d::Constant(r));
-    const auto b = coord(c + Eigen::Vector3d::Constant(r));
-    const double r2 = r * r;
-    std::size_t count = 0;
-    for (int z = a[2]; z <= b[2]; ++z)
-      for (int y = a[1]; y <= b[1]; ++y) {
-        const std::size_t first = start_[flat(a[0], y, z)], last = start_[flat(b[0], y, z) + 1];
-        if (out.size() < count + (last - first)) out.resize(count + (last - first));
-        for (std::size_t k = first; k < last; ++k) {
-          const int j = order_[k];
-          const double d2 = (points_[j] - c).squaredNorm();
-          out[count] = {d2, j};
-          count += static_cast<std::size_t>(d2 <= r2) & static_cast<std::size_t>(j != i);
-        }
-      }
-    out.resize(count);
-  }
 
   std::size_t points_in_cell_of(const Eigen::Vector3d& p) const {
     const auto c = coord(p);
