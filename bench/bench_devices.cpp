@@ -16,6 +16,7 @@
 #include "bench_support.h"
 #include "scanmesh/acquisition/capture.h"
 #include "scanmesh/core/atomic_file.h"
+#include "scanmesh/core/image.h"
 #include "scanmesh/drivers/board.h"
 #include "scanmesh/drivers/serial_transport.h"
 #include "scanmesh/sim/pty_board.h"
@@ -159,7 +160,7 @@ int main() {
     for (unsigned mask : {0u, 1u, 2u}) {
       drivers::Frame f;
       f.rgb = render(i * 0.1, mask);
-      f.original = sim::encode_mjpeg(f.rgb, 90);
+      f.original = encode_jpeg(f.rgb, 90);
       frames.push_back(std::move(f));
     }
     steps_frames.push_back(std::move(frames));

@@ -8,11 +8,12 @@
 #include <cmath>
 #include <numbers>
 #include <sstream>
-#include <opencv2/imgcodecs.hpp>
 #include <unordered_map>
 
+#include "scanmesh/core/atomic_file.h"
 #include "scanmesh/core/errors.h"
 #include "scanmesh/core/grid_file.h"
+#include "scanmesh/core/image.h"
 #include "scanmesh/core/mesh_io.h"
 
 namespace scanmesh {
@@ -625,18 +626,18 @@ ImportResult from_mesh_or_cloud(Mesh mesh, const Image8* texture, const ImportOp
   return grid_from_cloud(cloud, options, source);
 }
 
-// The OBJ's texture through OpenCV (PNG, JPEG, ...); an empty image when it cannot be read,
-// which the report then names (the geometry is still imported).
+// The OBJ's texture (PNG or JPEG) as 8-bit RGB: grey replicated, alpha dropped. An empty
+// image when it cannot be read, which the report then names (the geometry is still imported).
 Image8 read_texture(const std::filesystem::path& image) {
-  const cv::Mat bgr = cv::imread(image.string(), cv::IMREAD_COLOR);
-  Image8 out;
-  if (bgr.empty() || bgr.type() != CV_8UC3) return out;
-  out = Image8(bgr.cols, bgr.rows, 3);
-  for (int y = 0; y < bgr.rows; ++y)
-    for (int x = 0; x < bgr.cols; ++x) {
-      const cv::Vec3b c = bgr.at<cv::Vec3b>(y, x);
-      out.set_rgb(x, y, {c[2], c[1], c[0]});
-    }
+  Image8 decoded;
+  try {
+    decoded = decode_image(read_file_bytes(image), image);
+  } catch (const Error&) {
+    return {};
+  }
+  Image8 out(decoded.width, decoded.height, 3);
+  for (int y = 0; y < decoded.height; ++y)
+    for (int x = 0; x < decoded.width; ++x) out.set_rgb(x, y, decoded.rgb(x, y));
   return out;
 }
 

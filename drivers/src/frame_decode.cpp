@@ -1,12 +1,10 @@
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include <algorithm>
 #include <optional>
 #include <span>
 #include <utility>
 
 #include "scanmesh/core/errors.h"
+#include "scanmesh/core/image.h"
 #include "scanmesh/drivers/camera.h"
 
 namespace scanmesh::drivers {
@@ -119,7 +117,7 @@ Image8 decode_frame(PixelFormat format, std::span<const std::uint8_t> bytes, int
     }
     case PixelFormat::Mjpeg: {
       // A JPEG starts with SOI (FF D8) and, when complete, ends with EOI (FF D9); UVC cameras
-      // may pad after EOI. Checking SOI first keeps imdecode from guessing other formats.
+      // may pad after EOI. Checking SOI first keeps the decoder from guessing other formats.
       if (bytes.size() < 4 || bytes[0] != 0xff || bytes[1] != 0xd8)
         throw FileFormatError(source, "MJPEG frame does not start with a JPEG SOI marker");
       // A frame cut short by a USB error lacks EOI; libjpeg would fill the rest with grey and
@@ -129,7 +127,7 @@ Image8 decode_frame(PixelFormat format, std::span<const std::uint8_t> bytes, int
       if (bytes[end - 2] != 0xff || bytes[end - 1] != 0xd9)
         throw FileFormatError(source, "MJPEG frame is truncated (no JPEG EOI marker)");
       // The size the JPEG header declares must be the negotiated one *before* decoding: a
-      // corrupt or hostile header declaring 60000 x 60000 would otherwise make OpenCV
+      // corrupt or hostile header declaring 60000 x 60000 would otherwise make the decoder
       // allocate gigabytes (found by fuzz_v4l2_frame_decode).
       const auto declared = jpeg_declared_size(bytes);
       if (!declared)
@@ -138,23 +136,12 @@ Image8 decode_frame(PixelFormat format, std::span<const std::uint8_t> bytes, int
         throw FileFormatError(source, "MJPEG frame declares " + std::to_string(declared->first) +
                                           "x" + std::to_string(declared->second) + ", expected " +
                                           std::to_string(width) + "x" + std::to_string(height));
-      cv::Mat decoded;
-      try {
-        const cv::Mat buffer(1, static_cast<int>(bytes.size()), CV_8UC1,
-                             const_cast<std::uint8_t*>(bytes.data()));
-        decoded = cv::imdecode(buffer, cv::IMREAD_COLOR);
-      } catch (const cv::Exception& e) {
-        throw FileFormatError(source, std::string("MJPEG frame does not decode: ") + e.what());
-      }
-      if (decoded.empty())
-        throw FileFormatError(source, "MJPEG frame is corrupt (OpenCV imdecode failed)");
-      if (decoded.cols != width || decoded.rows != height)
-        throw FileFormatError(source, "MJPEG frame is " + std::to_string(decoded.cols) + "x" +
-                                          std::to_string(decoded.rows) + ", expected " +
+      Image8 decoded = decode_jpeg(bytes, source);
+      if (decoded.width != width || decoded.height != height)
+        throw FileFormatError(source, "MJPEG frame is " + std::to_string(decoded.width) + "x" +
+                                          std::to_string(decoded.height) + ", expected " +
                                           std::to_string(width) + "x" + std::to_string(height));
-      cv::Mat rgb(height, width, CV_8UC3, out.pixels.data());
-      cv::cvtColor(decoded, rgb, cv::COLOR_BGR2RGB);
-      return out;
+      return decoded;
     }
   }
   throw InvalidInputError("unknown pixel format");

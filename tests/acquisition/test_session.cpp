@@ -6,10 +6,11 @@
 #include <fstream>
 #include <numbers>
 
+#include "core/test_util.h"
 #include "scanmesh/acquisition/session.h"
 #include "scanmesh/core/errors.h"
+#include "scanmesh/core/image.h"
 #include "scanmesh/sim/sim_camera.h"
-#include "core/test_util.h"
 #include "session_compare.h"
 
 namespace scanmesh {
@@ -124,7 +125,7 @@ TEST(Session, MjpegStorageKeepsTheCameraBytesUnchanged) {
   std::vector<drivers::Frame> frames;
   for (unsigned mask : {0u, 1u, 2u}) {
     drivers::Frame f;
-    f.original = sim::encode_mjpeg(render(0.5, mask), 85);
+    f.original = encode_jpeg(render(0.5, mask), 85);
     f.rgb = drivers::decode_frame(drivers::PixelFormat::Mjpeg, f.original, 32, 24);
     frames.push_back(f);
   }

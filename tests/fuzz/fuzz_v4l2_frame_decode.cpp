@@ -1,4 +1,4 @@
-// libFuzzer entry point: the frame decoder of the V4L2 backend (YUYV, RGB24, MJPEG via OpenCV).
+// libFuzzer entry point: the frame decoder of the V4L2 backend (YUYV, RGB24, MJPEG via libjpeg).
 // Byte 0 picks the format, bytes 1-2 the size (width = 2 * (1 + b1 % 64), height = 1 + b2 % 64),
 // the rest is the payload as a camera would deliver it.
 #include <cstddef>

@@ -1,8 +1,5 @@
 #include "scanmesh/sim/sim_camera.h"
 
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -87,15 +84,6 @@ std::vector<std::uint8_t> encode_yuyv(const Image8& rgb) {
   return out;
 }
 
-std::vector<std::uint8_t> encode_mjpeg(const Image8& rgb, int quality) {
-  cv::Mat rgb_mat(rgb.height, rgb.width, CV_8UC3, const_cast<std::uint8_t*>(rgb.pixels.data()));
-  cv::Mat bgr;
-  cv::cvtColor(rgb_mat, bgr, cv::COLOR_RGB2BGR);
-  std::vector<std::uint8_t> out;
-  cv::imencode(".jpg", bgr, out, {cv::IMWRITE_JPEG_QUALITY, quality});
-  return out;
-}
-
 SimCamera::SimCamera(FrameRenderer renderer, std::function<double()> angle_rad,
                      std::function<unsigned()> laser_mask, SimCameraOptions options)
     : renderer_(std::move(renderer)),
@@ -177,7 +165,7 @@ SimCamera::Capture SimCamera::capture(SimPixelFormat format) {
       c.bytes = encode_yuyv(img);
       break;
     case SimPixelFormat::Mjpeg:
-      c.bytes = encode_mjpeg(img, quality);
+      c.bytes = encode_jpeg(img, quality);
       break;
     case SimPixelFormat::Rgb24:
       c.bytes = img.pixels;

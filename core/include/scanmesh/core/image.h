@@ -1,5 +1,5 @@
-// 8/16-bit raster images and PNG I/O (libpng). Pictures for people: textures, depth maps,
-// renders, curvature maps.
+// 8/16-bit raster images, PNG I/O (libpng) and JPEG (libjpeg). Pictures for people: textures,
+// depth maps, renders, curvature maps; JPEG for camera frames (MJPEG) and textures.
 #pragma once
 
 #include <cstdint>
@@ -41,5 +41,15 @@ void write_png(const std::filesystem::path& path, const Image8& image);
 Image8 read_png(const std::filesystem::path& path);
 //! The same decoder on bytes already in memory; `source` names them in errors.
 Image8 decode_png(std::span<const std::uint8_t> bytes, const std::filesystem::path& source);
+
+//! Decodes a JPEG (baseline or progressive, grey or colour) to 8-bit RGB, grey replicated.
+//! Throws FileFormatError naming `source` when libjpeg cannot decode it or the header declares
+//! more than 1 GiB of pixels. Data libjpeg recovers from (a truncated scan) decodes silently.
+Image8 decode_jpeg(std::span<const std::uint8_t> bytes, const std::filesystem::path& source);
+//! The JPEG bytes of an RGB image at `quality` (1..100): baseline, 4:2:0, standard Huffman
+//! tables, JFIF header (libjpeg's defaults, as OpenCV's encoder).
+std::vector<std::uint8_t> encode_jpeg(const Image8& rgb, int quality);
+//! A JPEG (by its SOI marker) or else a PNG, decoded as decode_jpeg / decode_png do.
+Image8 decode_image(std::span<const std::uint8_t> bytes, const std::filesystem::path& source);
 
 }  // namespace scanmesh

@@ -124,7 +124,7 @@ class V4l2Camera final : public Camera {
 };
 
 //! Decodes one frame payload into RGB. YUYV (BT.601 full range, as UVC cameras send it) and
-//! RGB24 are checked against the size; MJPEG goes through OpenCV's imdecode and must decode to
+//! RGB24 are checked against the size; MJPEG goes through libjpeg (decode_jpeg) and must decode to
 //! width x height. Throws FileFormatError naming `source` for a truncated or corrupt frame.
 //! Pure, so it can be fuzzed (tests/fuzz/fuzz_v4l2_frame_decode.cpp).
 Image8 decode_frame(PixelFormat format, std::span<const std::uint8_t> bytes, int width, int height,

@@ -53,8 +53,6 @@ struct SimCameraOptions {
 
 //! RGB -> YUYV (BT.601 full range; each pixel pair shares the mean chroma).
 std::vector<std::uint8_t> encode_yuyv(const Image8& rgb);
-//! RGB -> baseline JPEG (OpenCV imencode).
-std::vector<std::uint8_t> encode_mjpeg(const Image8& rgb, int quality);
 
 class SimCamera {
  public:
