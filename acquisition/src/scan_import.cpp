@@ -627,12 +627,14 @@ ImportResult from_mesh_or_cloud(Mesh mesh, const Image8* texture, const ImportOp
 }
 
 // The OBJ's texture (PNG or JPEG) as 8-bit RGB: grey replicated, alpha dropped. An empty
-// image when it cannot be read, which the report then names (the geometry is still imported).
-Image8 read_texture(const std::filesystem::path& image) {
+// image and the reason in `problem` when it cannot be read, which the report then names (the
+// geometry is still imported).
+Image8 read_texture(const std::filesystem::path& image, std::string& problem) {
   Image8 decoded;
   try {
     decoded = decode_image(read_file_bytes(image), image);
-  } catch (const Error&) {
+  } catch (const Error& e) {
+    problem = e.what();
     return {};
   }
   Image8 out(decoded.width, decoded.height, 3);
@@ -650,11 +652,12 @@ ImportResult import_scan(const std::filesystem::path& input, const ImportOptions
   if (ext == ".obj") {
     ObjMesh obj = read_obj(input);
     Image8 texture;
-    if (!obj.texture.empty()) texture = read_texture(obj.texture);
+    std::string problem;
+    if (!obj.texture.empty()) texture = read_texture(obj.texture, problem);
     ImportResult r = from_mesh_or_cloud(std::move(obj.mesh), &texture, options, input);
     if (!obj.texture.empty() && texture.width == 0)
-      r.report.warnings.push_back("texture " + obj.texture.string() +
-                                  " could not be read; the grid has no colours");
+      r.report.warnings.push_back("texture " + obj.texture.string() + " could not be read (" +
+                                  problem + "); the grid has no colours");
     return r;
   }
   if (ext == ".vtk" || ext == ".vtp")

@@ -15,6 +15,8 @@
 
 #include <csetjmp>
 #include <cstdlib>
+#include <memory>
+#include <new>
 #include <string>
 
 #include "scanmesh/core/errors.h"
@@ -24,8 +26,13 @@ namespace scanmesh {
 
 namespace {
 
-// A picture larger than this is surely a hostile header (the PNG reader's bound).
+// A picture larger than this is surely a hostile header (the PNG reader's bound), and so is
+// a stream asking libjpeg for more working memory (a progressive JPEG keeps every coefficient:
+// two bytes per sample, beyond the pixels) or for more scans than any encoder writes (each
+// scan is a pass over the coefficients: a small file of thousands of scans takes minutes).
 constexpr std::uint64_t kMaxJpegPixelBytes = 1ull << 30;
+constexpr long kMaxJpegWorkingBytes = 1l << 30;
+constexpr int kMaxJpegScans = 500;
 
 struct ErrorManager {
   jpeg_error_mgr pub;
@@ -43,6 +50,15 @@ struct ErrorManager {
 // messages, and the frame checks before decoding say what is wrong with a frame.
 void stay_quiet(j_common_ptr) {}
 
+void refuse_endless_scans(j_common_ptr info) {
+  auto* d = reinterpret_cast<j_decompress_ptr>(info);
+  if (d->is_decompressor && d->input_scan_number > kMaxJpegScans) {
+    auto* err = reinterpret_cast<ErrorManager*>(info->err);
+    std::snprintf(err->message, sizeof err->message, "has more than %d scans", kMaxJpegScans);
+    std::longjmp(err->jump, 1);
+  }
+}
+
 jpeg_error_mgr* install(ErrorManager& err) {
   jpeg_error_mgr* pub = jpeg_std_error(&err.pub);
   err.pub.error_exit = jump_on_error;
@@ -53,12 +69,16 @@ jpeg_error_mgr* install(ErrorManager& err) {
 // False with err.message set when libjpeg gives up or the picture is too large.
 bool decode_into(std::span<const std::uint8_t> bytes, Image8& out, ErrorManager& err) {
   jpeg_decompress_struct info;
+  jpeg_progress_mgr progress{};
+  progress.progress_monitor = refuse_endless_scans;
   info.err = install(err);
   if (setjmp(err.jump)) {
     jpeg_destroy_decompress(&info);
     return false;
   }
   jpeg_create_decompress(&info);
+  info.mem->max_memory_to_use = kMaxJpegWorkingBytes;  // beyond it libjpeg gives up (no disk)
+  info.progress = &progress;
   jpeg_mem_src(&info, bytes.data(), static_cast<unsigned long>(bytes.size()));
   jpeg_read_header(&info, TRUE);
   info.out_color_space = JCS_RGB;  // grey pictures are replicated, as OpenCV's IMREAD_COLOR
@@ -70,7 +90,13 @@ bool decode_into(std::span<const std::uint8_t> bytes, Image8& out, ErrorManager&
     jpeg_destroy_decompress(&info);
     return false;
   }
-  out = Image8(static_cast<int>(info.output_width), static_cast<int>(info.output_height), 3);
+  try {
+    out = Image8(static_cast<int>(info.output_width), static_cast<int>(info.output_height), 3);
+  } catch (const std::bad_alloc&) {
+    std::snprintf(err.message, sizeof err.message, "needs more memory than there is");
+    jpeg_destroy_decompress(&info);
+    return false;
+  }
   jpeg_start_decompress(&info);
   while (info.output_scanline < info.output_height) {
     JSAMPROW row = out.at(0, static_cast<int>(info.output_scanline));
@@ -132,18 +158,21 @@ std::vector<std::uint8_t> encode_jpeg(const Image8& rgb, int quality) {
     throw InvalidInputError("encode_jpeg needs a non-empty RGB image");
   if (quality < 1 || quality > 100)
     throw InvalidInputError("JPEG quality " + std::to_string(quality) + " is not in 1..100");
+  // JPEG's own bound on a side (libjpeg's JPEG_MAX_DIMENSION).
+  if (rgb.width > 65500 || rgb.height > 65500)
+    throw InvalidInputError("a JPEG cannot hold " + std::to_string(rgb.width) + " x " +
+                            std::to_string(rgb.height) + " pixels (65,500 at most per side)");
   EncodedBytes encoded;
   ErrorManager err;
   const bool ok = encode_into(rgb, quality, encoded, err);
-  std::vector<std::uint8_t> out;
-  if (ok) out.assign(encoded.data, encoded.data + encoded.size);
-  std::free(encoded.data);
+  const std::unique_ptr<unsigned char, decltype(&std::free)> owner(encoded.data, &std::free);
   if (!ok) throw IoError(std::string("JPEG encoding failed: ") + err.message);
-  return out;
+  return {encoded.data, encoded.data + encoded.size};
 }
 
 Image8 decode_image(std::span<const std::uint8_t> bytes, const std::filesystem::path& source) {
-  if (bytes.size() >= 2 && bytes[0] == 0xff && bytes[1] == 0xd8) return decode_jpeg(bytes, source);
+  if (bytes.size() >= 3 && bytes[0] == 0xff && bytes[1] == 0xd8 && bytes[2] == 0xff)
+    return decode_jpeg(bytes, source);
   return decode_png(bytes, source);
 }
 

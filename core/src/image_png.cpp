@@ -97,6 +97,10 @@ Image8 decode_png(std::span<const std::uint8_t> bytes, const std::filesystem::pa
   png.version = PNG_IMAGE_VERSION;
   if (!png_image_begin_read_from_memory(&png, bytes.data(), bytes.size()))
     throw FileFormatError(path, std::string("not a readable PNG: ") + png.message);
+  // 16-bit samples without a gAMA or sRGB chunk are taken as sRGB-encoded and scaled to 8
+  // bits, as other readers do; libpng's default took them for linear light and brightened
+  // them (0x8000 became 188 instead of 128).
+  png.flags |= PNG_IMAGE_FLAG_16BIT_sRGB;
   // Grey stays grey, colour stays colour; any alpha (incl. grey + alpha) becomes RGBA.
   const bool alpha = (png.format & PNG_FORMAT_FLAG_ALPHA) != 0;
   const bool colour = (png.format & PNG_FORMAT_FLAG_COLOR) != 0;

@@ -74,9 +74,9 @@ Image8 decode_frame(PixelFormat format, std::span<const std::uint8_t> bytes, int
     throw InvalidInputError("frame size " + std::to_string(width) + "x" + std::to_string(height) +
                             " is impossible");
   const auto w = static_cast<std::size_t>(width), h = static_cast<std::size_t>(height);
-  Image8 out(width, height, 3);
   switch (format) {
     case PixelFormat::Yuyv: {
+      Image8 out(width, height, 3);
       const std::size_t stride = bytes_per_line ? bytes_per_line : w * 2;
       if (stride < w * 2 || width % 2 != 0)
         throw FileFormatError(source, "YUYV line of " + std::to_string(stride) +
@@ -106,6 +106,7 @@ Image8 decode_frame(PixelFormat format, std::span<const std::uint8_t> bytes, int
       return out;
     }
     case PixelFormat::Rgb24: {
+      Image8 out(width, height, 3);
       const std::size_t stride = bytes_per_line ? bytes_per_line : w * 3;
       if (stride < w * 3 || bytes.size() < stride * (h - 1) + w * 3)
         throw FileFormatError(source, "RGB24 frame truncated: " + std::to_string(bytes.size()) +

@@ -1,4 +1,9 @@
 #include <gtest/gtest.h>
+#include <zlib.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
 
 #include "scanmesh/core/atomic_file.h"
 #include "scanmesh/core/errors.h"
@@ -15,6 +20,50 @@ Image8 pattern(int w, int h, int channels) {
   for (std::size_t k = 0; k < image.pixels.size(); ++k)
     image.pixels[k] = static_cast<std::uint8_t>((k * 37 + k / 7) & 0xff);
   return image;
+}
+
+// A 16-bit grey PNG without gAMA or sRGB chunk, every sample `value`, built chunk by chunk
+// (the library writes 8-bit PNGs only).
+std::vector<std::uint8_t> grey16_png(int w, int h, std::uint16_t value) {
+  std::vector<std::uint8_t> out{0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  auto be32 = [](std::vector<std::uint8_t>& v, std::uint32_t x) {
+    for (int s = 24; s >= 0; s -= 8) v.push_back(static_cast<std::uint8_t>(x >> s));
+  };
+  auto chunk = [&](const char* type, const std::vector<std::uint8_t>& data) {
+    be32(out, static_cast<std::uint32_t>(data.size()));
+    std::vector<std::uint8_t> body(type, type + 4);
+    body.insert(body.end(), data.begin(), data.end());
+    out.insert(out.end(), body.begin(), body.end());
+    be32(out, static_cast<std::uint32_t>(crc32(0, body.data(), static_cast<uInt>(body.size()))));
+  };
+  std::vector<std::uint8_t> header;
+  be32(header, static_cast<std::uint32_t>(w));
+  be32(header, static_cast<std::uint32_t>(h));
+  header.insert(header.end(), {16, 0, 0, 0, 0});  // 16 bits, grey, deflate, no filter, no interlace
+  chunk("IHDR", header);
+  std::vector<std::uint8_t> raw;
+  for (int y = 0; y < h; ++y) {
+    raw.push_back(0);  // filter: none
+    for (int x = 0; x < w; ++x)
+      raw.insert(raw.end(), {std::uint8_t(value >> 8), std::uint8_t(value)});
+  }
+  std::vector<std::uint8_t> packed(compressBound(static_cast<uLong>(raw.size())));
+  uLongf size = static_cast<uLongf>(packed.size());
+  compress(packed.data(), &size, raw.data(), static_cast<uLong>(raw.size()));
+  packed.resize(size);
+  chunk("IDAT", packed);
+  chunk("IEND", {});
+  return out;
+}
+
+TEST(ImagePng, SixteenBitSamplesAreScaledNotTakenForLinearLight) {
+  for (const auto& [value, expected] : {std::pair{0x8000, 128}, std::pair{0xffff, 255},
+                                        std::pair{0x0000, 0}, std::pair{0x4000, 64}}) {
+    const Image8 image = decode_png(grey16_png(5, 3, static_cast<std::uint16_t>(value)), "g16.png");
+    ASSERT_EQ(image.channels, 1);
+    ASSERT_EQ(image.width, 5);
+    for (std::uint8_t p : image.pixels) EXPECT_NEAR(p, expected, 1) << "sample " << value;
+  }
 }
 
 TEST(ImagePng, RoundTripIsExactForGreyRgbAndRgba) {

@@ -94,5 +94,26 @@ TEST(PointGrid, VisitBallFindsExactlyThePointsWithinTheRadius) {
   }
 }
 
+TEST(PointGrid, CollectShellFindsThePointsBetweenTheTwoRadiiExceptTheSkippedOne) {
+  const auto pts = awkward_cloud();
+  const PointGrid grid(pts, 0.03);
+  Neighbours got;
+  for (int i = 0; i < static_cast<int>(pts.size()); i += 13) {
+    for (const auto& [inner, outer] :
+         {std::pair{-1.0, 0.02}, std::pair{0.01, 0.05}, std::pair{0.05, 0.3}}) {
+      const double min_d2 = inner < 0 ? -1.0 : inner * inner;
+      grid.collect_shell(pts[i], min_d2, outer, i, got);
+      Neighbours want;
+      for (int j = 0; j < static_cast<int>(pts.size()); ++j) {
+        const double d2 = (pts[j] - pts[i]).squaredNorm();
+        if (j != i && d2 > min_d2 && d2 <= outer * outer) want.emplace_back(d2, j);
+      }
+      std::sort(got.begin(), got.end());
+      std::sort(want.begin(), want.end());
+      ASSERT_EQ(got, want) << "point " << i << ", shell " << inner << " .. " << outer;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace scanmesh::kernel

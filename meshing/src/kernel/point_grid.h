@@ -225,6 +225,10 @@ class PointGrid {
     // front of `out`, which most of the few dozen points a query finds skip with one compare
     // against the K-th (cheaper than nth_element and a sort of the front).
     const std::size_t keep = std::min(want, out.size());
+    if (keep == 0) {
+      out.clear();
+      return;
+    }
     for (std::size_t t = 1; t < out.size(); ++t) {
       const std::size_t end = std::min(t, keep);  // out[0, end) is sorted
       if (end == keep && !(out[t] < out[keep - 1])) continue;

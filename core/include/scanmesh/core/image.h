@@ -42,14 +42,17 @@ Image8 read_png(const std::filesystem::path& path);
 //! The same decoder on bytes already in memory; `source` names them in errors.
 Image8 decode_png(std::span<const std::uint8_t> bytes, const std::filesystem::path& source);
 
-//! Decodes a JPEG (baseline or progressive, grey or colour) to 8-bit RGB, grey replicated.
-//! Throws FileFormatError naming `source` when libjpeg cannot decode it or the header declares
-//! more than 1 GiB of pixels. Data libjpeg recovers from (a truncated scan) decodes silently.
+//! Decodes a JPEG (baseline or progressive, grey, YCbCr or RGB) to 8-bit RGB, grey replicated.
+//! Throws FileFormatError naming `source` when libjpeg cannot decode it (CMYK and YCCK are
+//! refused), the header declares more than 1 GiB of RGB bytes, or the stream needs more than
+//! 1 GiB of working memory or 500 scans. Data libjpeg recovers from (a truncated scan) decodes
+//! silently. The EXIF orientation is not applied: pixels stay in stored order.
 Image8 decode_jpeg(std::span<const std::uint8_t> bytes, const std::filesystem::path& source);
 //! The JPEG bytes of an RGB image at `quality` (1..100): baseline, 4:2:0, standard Huffman
 //! tables, JFIF header (libjpeg's defaults, as OpenCV's encoder).
 std::vector<std::uint8_t> encode_jpeg(const Image8& rgb, int quality);
-//! A JPEG (by its SOI marker) or else a PNG, decoded as decode_jpeg / decode_png do.
+//! A JPEG (by its SOI marker and the next marker's FF) or else a PNG, decoded as decode_jpeg /
+//! decode_png do.
 Image8 decode_image(std::span<const std::uint8_t> bytes, const std::filesystem::path& source);
 
 }  // namespace scanmesh
