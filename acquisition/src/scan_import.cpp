@@ -626,21 +626,16 @@ ImportResult from_mesh_or_cloud(Mesh mesh, const Image8* texture, const ImportOp
   return grid_from_cloud(cloud, options, source);
 }
 
-// The OBJ's texture (PNG or JPEG) as 8-bit RGB: grey replicated, alpha dropped. An empty
-// image and the reason in `problem` when it cannot be read, which the report then names (the
-// geometry is still imported).
+// The OBJ's texture (PNG or JPEG) as decoded: grey, RGB or RGBA, which hit_color reads through
+// Image8::rgb(). An empty image and the reason in `problem` when it cannot be read, which the
+// report then names (the geometry is still imported).
 Image8 read_texture(const std::filesystem::path& image, std::string& problem) {
-  Image8 decoded;
   try {
-    decoded = decode_image(read_file_bytes(image), image);
+    return decode_image(read_file_bytes(image), image);
   } catch (const Error& e) {
     problem = e.what();
     return {};
   }
-  Image8 out(decoded.width, decoded.height, 3);
-  for (int y = 0; y < decoded.height; ++y)
-    for (int x = 0; x < decoded.width; ++x) out.set_rgb(x, y, decoded.rgb(x, y));
-  return out;
 }
 
 }  // namespace

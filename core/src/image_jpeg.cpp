@@ -17,7 +17,9 @@
 #include <cstdlib>
 #include <memory>
 #include <new>
+#include <optional>
 #include <string>
+#include <utility>
 
 #include "scanmesh/core/errors.h"
 #include "scanmesh/core/image.h"
@@ -38,7 +40,15 @@ struct ErrorManager {
   jpeg_error_mgr pub;
   std::jmp_buf jump;
   char message[JMSG_LENGTH_MAX] = "";
+  bool ours = false;  // the message is one of this file's limits, not libjpeg's
 };
+
+// One of this file's refusals: the message (printf-style) and `ours` set.
+template <typename... Args>
+void refuse(ErrorManager& err, const char* format, Args... args) {
+  std::snprintf(err.message, sizeof err.message, format, args...);
+  err.ours = true;
+}
 
 [[noreturn]] void jump_on_error(j_common_ptr info) {
   auto* err = reinterpret_cast<ErrorManager*>(info->err);
@@ -54,7 +64,7 @@ void refuse_endless_scans(j_common_ptr info) {
   auto* d = reinterpret_cast<j_decompress_ptr>(info);
   if (d->is_decompressor && d->input_scan_number > kMaxJpegScans) {
     auto* err = reinterpret_cast<ErrorManager*>(info->err);
-    std::snprintf(err->message, sizeof err->message, "has more than %d scans", kMaxJpegScans);
+    refuse(*err, "has more than %d scans", kMaxJpegScans);
     std::longjmp(err->jump, 1);
   }
 }
@@ -66,8 +76,11 @@ jpeg_error_mgr* install(ErrorManager& err) {
   return pub;
 }
 
-// False with err.message set when libjpeg gives up or the picture is too large.
-bool decode_into(std::span<const std::uint8_t> bytes, Image8& out, ErrorManager& err) {
+// False with err.message set when libjpeg gives up, the picture is too large or its header
+// declares another size than `expected`.
+bool decode_into(std::span<const std::uint8_t> bytes,
+                 const std::optional<std::pair<int, int>>& expected, Image8& out,
+                 ErrorManager& err) {
   jpeg_decompress_struct info;
   jpeg_progress_mgr progress{};
   progress.progress_monitor = refuse_endless_scans;
@@ -84,16 +97,21 @@ bool decode_into(std::span<const std::uint8_t> bytes, Image8& out, ErrorManager&
   info.out_color_space = JCS_RGB;  // grey pictures are replicated, as OpenCV's IMREAD_COLOR
   jpeg_calc_output_dimensions(&info);
   const std::uint64_t pixel_bytes = std::uint64_t{info.output_width} * info.output_height * 3;
-  if (pixel_bytes == 0 || pixel_bytes > kMaxJpegPixelBytes) {
-    std::snprintf(err.message, sizeof err.message, "declares an impossible size %u x %u",
-                  info.output_width, info.output_height);
-    jpeg_destroy_decompress(&info);
-    return false;
-  }
-  try {
-    out = Image8(static_cast<int>(info.output_width), static_cast<int>(info.output_height), 3);
-  } catch (const std::bad_alloc&) {
-    std::snprintf(err.message, sizeof err.message, "needs more memory than there is");
+  bool refused = true;
+  if (pixel_bytes == 0 || pixel_bytes > kMaxJpegPixelBytes)
+    refuse(err, "declares an impossible size %u x %u", info.output_width, info.output_height);
+  else if (expected && (info.output_width != static_cast<JDIMENSION>(expected->first) ||
+                        info.output_height != static_cast<JDIMENSION>(expected->second)))
+    refuse(err, "declares %ux%u, expected %dx%d", info.output_width, info.output_height,
+           expected->first, expected->second);
+  else
+    try {
+      out = Image8(static_cast<int>(info.output_width), static_cast<int>(info.output_height), 3);
+      refused = false;
+    } catch (const std::bad_alloc&) {
+      refuse(err, "needs more memory than there is");
+    }
+  if (refused) {  // before any pixel is allocated or decoded
     jpeg_destroy_decompress(&info);
     return false;
   }
@@ -142,13 +160,15 @@ bool encode_into(const Image8& rgb, int quality, EncodedBytes& out, ErrorManager
 
 }  // namespace
 
-Image8 decode_jpeg(std::span<const std::uint8_t> bytes, const std::filesystem::path& source) {
+Image8 decode_jpeg(std::span<const std::uint8_t> bytes, const std::filesystem::path& source,
+                   const std::optional<std::pair<int, int>>& expected_size) {
   if (bytes.size() < 4 || bytes[0] != 0xff || bytes[1] != 0xd8)
     throw FileFormatError(source, "not a JPEG (no SOI marker)");
   Image8 out;
   ErrorManager err;
-  if (!decode_into(bytes, out, err))
-    throw FileFormatError(source, std::string("JPEG does not decode: ") + err.message);
+  if (!decode_into(bytes, expected_size, out, err))
+    throw FileFormatError(source, std::string(err.ours ? "JPEG " : "JPEG does not decode: ") +
+                                      err.message);
   return out;
 }
 

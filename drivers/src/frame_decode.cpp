@@ -1,5 +1,4 @@
 #include <algorithm>
-#include <optional>
 #include <span>
 #include <utility>
 
@@ -32,41 +31,6 @@ PixelFormat parse_pixel_format(const std::string& name) {
   if (name == "rgb24") return PixelFormat::Rgb24;
   throw InvalidInputError("unknown pixel format '" + name + "' (yuyv, mjpeg or rgb24)");
 }
-
-namespace {
-
-//! Width and height from a JPEG's frame header (any SOFn marker), walking the marker segments
-//! up to the start of scan; nullopt when there is none or a segment runs past the end.
-std::optional<std::pair<int, int>> jpeg_declared_size(std::span<const std::uint8_t> b) {
-  std::size_t i = 2;  // after SOI
-  while (i + 4 <= b.size()) {
-    if (b[i] != 0xff) return std::nullopt;
-    const std::uint8_t marker = b[i + 1];
-    if (marker == 0xff) {  // fill byte
-      ++i;
-      continue;
-    }
-    if (marker == 0x01 || (marker >= 0xd0 && marker <= 0xd7)) {  // no length field
-      i += 2;
-      continue;
-    }
-    if (marker == 0xda || marker == 0xd9) return std::nullopt;  // scan or end before a header
-    const std::size_t length = (std::size_t{b[i + 2]} << 8) | b[i + 3];
-    if (length < 2 || i + 2 + length > b.size()) return std::nullopt;
-    const bool sof =
-        marker >= 0xc0 && marker <= 0xcf && marker != 0xc4 && marker != 0xc8 && marker != 0xcc;
-    if (sof) {
-      if (length < 8) return std::nullopt;  // P, Y, X, Nf at least
-      const int height = (b[i + 5] << 8) | b[i + 6];
-      const int width = (b[i + 7] << 8) | b[i + 8];
-      return std::make_pair(width, height);
-    }
-    i += 2 + length;
-  }
-  return std::nullopt;
-}
-
-}  // namespace
 
 Image8 decode_frame(PixelFormat format, std::span<const std::uint8_t> bytes, int width, int height,
                     std::uint32_t bytes_per_line, const std::string& source) {
@@ -118,7 +82,8 @@ Image8 decode_frame(PixelFormat format, std::span<const std::uint8_t> bytes, int
     }
     case PixelFormat::Mjpeg: {
       // A JPEG starts with SOI (FF D8) and, when complete, ends with EOI (FF D9); UVC cameras
-      // may pad after EOI. Checking SOI first keeps the decoder from guessing other formats.
+      // may pad after EOI. SOI is checked here so that the EOI test below has four bytes and
+      // the message names the frame.
       if (bytes.size() < 4 || bytes[0] != 0xff || bytes[1] != 0xd8)
         throw FileFormatError(source, "MJPEG frame does not start with a JPEG SOI marker");
       // A frame cut short by a USB error lacks EOI; libjpeg would fill the rest with grey and
@@ -129,20 +94,9 @@ Image8 decode_frame(PixelFormat format, std::span<const std::uint8_t> bytes, int
         throw FileFormatError(source, "MJPEG frame is truncated (no JPEG EOI marker)");
       // The size the JPEG header declares must be the negotiated one *before* decoding: a
       // corrupt or hostile header declaring 60000 x 60000 would otherwise make the decoder
-      // allocate gigabytes (found by fuzz_v4l2_frame_decode).
-      const auto declared = jpeg_declared_size(bytes);
-      if (!declared)
-        throw FileFormatError(source, "MJPEG frame has no JPEG frame header (SOF marker)");
-      if (declared->first != width || declared->second != height)
-        throw FileFormatError(source, "MJPEG frame declares " + std::to_string(declared->first) +
-                                          "x" + std::to_string(declared->second) + ", expected " +
-                                          std::to_string(width) + "x" + std::to_string(height));
-      Image8 decoded = decode_jpeg(bytes, source);
-      if (decoded.width != width || decoded.height != height)
-        throw FileFormatError(source, "MJPEG frame is " + std::to_string(decoded.width) + "x" +
-                                          std::to_string(decoded.height) + ", expected " +
-                                          std::to_string(width) + "x" + std::to_string(height));
-      return decoded;
+      // allocate gigabytes (found by fuzz_v4l2_frame_decode). decode_jpeg checks it right
+      // after reading the header.
+      return decode_jpeg(bytes, source, std::make_pair(width, height));
     }
   }
   throw InvalidInputError("unknown pixel format");

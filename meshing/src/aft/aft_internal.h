@@ -126,6 +126,11 @@ class TriangleCells {
   struct Undo {
     std::vector<std::int64_t> keys;              // cells that got an entry
     std::vector<std::pair<int, CellBox>> filed;  // (t, its filing's cells before)
+    // Emptied, keeping the arrays' memory (one undo serves every candidate of a pass).
+    void clear() {
+      keys.clear();
+      filed.clear();
+    }
   };
 
   explicit TriangleCells(double cell) : cell_(cell) {}

@@ -191,8 +191,7 @@ class Repair {
     void clear() {
       operations.clear();
       moved.clear();
-      cells.keys.clear();
-      cells.filed.clear();
+      cells.clear();
       n_tris = n_verts = 0;
     }
   };

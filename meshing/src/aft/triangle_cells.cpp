@@ -50,7 +50,7 @@ void TriangleCells::insert(int t, const std::array<int, 3>& f, std::span<const E
 void TriangleCells::take_back(Undo& undo) {
   for (auto it = undo.keys.rbegin(); it != undo.keys.rend(); ++it) lists_[*it].pop_back();
   for (auto it = undo.filed.rbegin(); it != undo.filed.rend(); ++it) filed_[it->first] = it->second;
-  undo = Undo{};
+  undo.clear();
 }
 
 namespace {

@@ -161,7 +161,7 @@ void compute_normals(Context& ctx, const std::vector<Eigen::Vector3f>* given) {
     std::vector<std::pair<double, int>> nn;
 #pragma omp for schedule(dynamic, 512)
     for (int o = 0; o < n; ++o) {
-      const int c = ctx.grid.order()[o];  // cell order: neighbours are in cache
+      const int c = o;  // the points are in cell order: neighbours are in cache
       ctx.grid.knn(c, kNormalNeighbours, nn);
       for (std::size_t k = 0; k < nn.size(); ++k) ctx.knn[c * kNormalNeighbours + k] = nn[k].second;
       ctx.spacing[c] = nn.empty() ? 0.0 : std::sqrt(nn[0].first);
@@ -556,7 +556,7 @@ class Assembly {
  public:
   Assembly(const std::vector<Vector3d>& pts, double eps_area, int threads)
       : pts_(pts), others_around_(pts.size(), 0), eps_area_(eps_area) {
-    // A million stars are 136 MB: constructed in parallel, so both threads fault in the pages.
+    // A million stars are 136 MB: constructed in parallel, so every thread faults in its share of the pages.
     star_.resize(pts.size());
     const auto n = static_cast<std::ptrdiff_t>(pts.size());
 #pragma omp parallel for num_threads(threads) schedule(static)
@@ -935,7 +935,8 @@ class SurfaceGrowth {
     if (candidate_of_) (*candidate_of_)[f] = cand;
     return true;
   }
-  // The boundary half-edges of this growth's faces, in face order.
+  // The boundary half-edges of the faces from first_face_ on (a block's own slots, or every
+  // face when the growth appends), in face order.
   std::vector<HalfEdge> open_half_edges() const {
     std::vector<HalfEdge> open;
     const std::size_t end =
@@ -1065,7 +1066,7 @@ class SurfaceGrowth {
   std::vector<std::vector<HalfEdge>> waiting_;  // edges stalled on a vertex
   std::vector<int> log_;  // candidates in the order they joined
   int next_slot_, slots_end_;  // a block's next reserved face and the end of its range
-  int first_face_;             // the first face this growth made
+  int first_face_;             // a block's first slot; 0 when the growth appends
   int newest_ = -1;
   std::size_t seeds_ = 0, glued_ = 0, unzipped_ = 0;
 };
@@ -1556,7 +1557,7 @@ std::vector<std::vector<FanEntry>> build_all_fans(const Context& ctx, const FanO
     FanBuilder builder(ctx);
 #pragma omp for schedule(dynamic, 256)
     for (int o = 0; o < n; ++o) {
-      const int c = ctx.grid.order()[o];
+      const int c = o;  // cell order (the points are sorted by cell)
       bool closed = builder.build(c, ctx.normals[c], fans[c]);
       if (!closed && !ctx.is_pca[c]) {
         // Gap (§3.4 fallback trigger): a fan still open at d_max is rebuilt once with the

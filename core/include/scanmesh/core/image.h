@@ -4,7 +4,9 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "scanmesh/core/color.h"
@@ -47,7 +49,10 @@ Image8 decode_png(std::span<const std::uint8_t> bytes, const std::filesystem::pa
 //! refused), the header declares more than 1 GiB of RGB bytes, or the stream needs more than
 //! 1 GiB of working memory or 500 scans. Data libjpeg recovers from (a truncated scan) decodes
 //! silently. The EXIF orientation is not applied: pixels stay in stored order.
-Image8 decode_jpeg(std::span<const std::uint8_t> bytes, const std::filesystem::path& source);
+//! `expected_size` (width, height): a header declaring another size is refused before any
+//! pixel is allocated (a camera frame must have the negotiated size).
+Image8 decode_jpeg(std::span<const std::uint8_t> bytes, const std::filesystem::path& source,
+                   const std::optional<std::pair<int, int>>& expected_size = std::nullopt);
 //! The JPEG bytes of an RGB image at `quality` (1..100): baseline, 4:2:0, standard Huffman
 //! tables, JFIF header (libjpeg's defaults, as OpenCV's encoder).
 std::vector<std::uint8_t> encode_jpeg(const Image8& rgb, int quality);
